@@ -1,0 +1,111 @@
+// YAML configuration loading into per-module config structs.
+//
+// Every module owns a plain struct with defaults and units in the declaration and a
+// `void load(const ConfigNode& node)` that reads the keys it knows. The YAML only overrides what it
+// names. After all modules have loaded, `ConfigFile::checkAllKeysUsed()` reports any key that no
+// module read (a typo must not silently fall back to a default). Errors name the file and the full
+// dotted key, e.g. "config/avia.yaml: lio.voxel_size: expected a number, got 'abc'".
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace livo {
+
+struct ConfigError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class ConfigNode;
+
+/// A parsed YAML document plus the record of which keys were read.
+class ConfigFile {
+ public:
+  /// Parses a file; throws ConfigError naming the file on I/O or syntax errors.
+  static ConfigFile load(const std::string& path);
+  /// Parses a string; `name` stands for the file name in error messages.
+  static ConfigFile parse(const std::string& yaml, const std::string& name = "<config>");
+
+  ConfigNode root() const;
+  const std::string& name() const;
+  /// Throws ConfigError naming the first key (dotted path) that no module read.
+  void checkAllKeysUsed() const;
+  /// All keys that were never read (dotted paths), for warnings.
+  std::vector<std::string> unusedKeys() const;
+
+ private:
+  struct State;
+  explicit ConfigFile(std::shared_ptr<State> s) : state_(std::move(s)) {}
+  std::shared_ptr<State> state_;
+  friend class ConfigNode;
+};
+
+/// A view on one YAML map (the document root or a section) that records what it reads.
+class ConfigNode {
+ public:
+  /// True when the key exists (does not mark it read).
+  bool has(const std::string& key) const;
+
+  /// Reads `key` into `out` if present; keeps `out` (the default) otherwise.
+  template <class T>
+  const ConfigNode& get(const std::string& key, T& out) const {
+    if (has(key)) readValue(key, out);
+    return *this;
+  }
+  /// Reads `key` into `out`; throws ConfigError naming the key when it is missing.
+  template <class T>
+  const ConfigNode& require(const std::string& key, T& out) const {
+    if (!has(key)) fail(key, "required key is missing");
+    readValue(key, out);
+    return *this;
+  }
+  /// A sub-section; an absent optional section yields an empty node (all defaults).
+  ConfigNode section(const std::string& key) const;
+  ConfigNode requireSection(const std::string& key) const;
+
+  /// Throws ConfigError("<file>: <path.key>: <what>").
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  /// Checks a condition on a value already read; throws naming the key otherwise.
+  void check(bool ok, const std::string& key, const std::string& what) const {
+    if (!ok) fail(key, what);
+  }
+  /// Dotted path of this section ("" for the root).
+  const std::string& path() const { return path_; }
+  const std::string& fileName() const;
+
+ private:
+  friend class ConfigFile;
+  ConfigNode(std::shared_ptr<ConfigFile::State> s, YAML::Node n, std::string path)
+      : state_(std::move(s)), node_(std::move(n)), path_(std::move(path)) {}
+  std::string fullKey(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  void markLeaf(const std::string& key) const;
+  YAML::Node child(const std::string& key) const;
+
+  void readValue(const std::string& key, double& out) const;
+  void readValue(const std::string& key, float& out) const;
+  void readValue(const std::string& key, int& out) const;
+  void readValue(const std::string& key, std::int64_t& out) const;
+  void readValue(const std::string& key, bool& out) const;
+  void readValue(const std::string& key, std::string& out) const;
+  void readValue(const std::string& key, std::vector<double>& out) const;
+  void readValue(const std::string& key, std::vector<int>& out) const;
+  void readValue(const std::string& key, std::vector<std::string>& out) const;
+  void readValue(const std::string& key, Eigen::Vector2d& out) const;
+  void readValue(const std::string& key, Eigen::Vector3d& out) const;
+  /// [x, y, z, qx, qy, qz, qw]; the quaternion must have a non-zero norm (normalised on read).
+  void readValue(const std::string& key, Eigen::Isometry3d& out) const;
+
+  std::shared_ptr<ConfigFile::State> state_;
+  YAML::Node node_;
+  std::string path_;
+};
+
+}  // namespace livo

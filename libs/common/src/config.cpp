@@ -1,0 +1,195 @@
+#include "livo/common/config.hpp"
+
+#include "livo/common/so3.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace livo {
+
+struct ConfigFile::State {
+  std::string name;
+  YAML::Node root;
+  std::set<std::string> leaves;    // dotted keys read as values
+  std::set<std::string> sections;  // dotted keys opened as sections
+};
+
+namespace {
+
+std::string scalarText(const YAML::Node& n) {
+  if (n.IsScalar()) return n.Scalar();
+  if (n.IsSequence()) return "a list";
+  if (n.IsMap()) return "a map";
+  return "null";
+}
+
+}  // namespace
+
+ConfigFile ConfigFile::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open config file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse(ss.str(), path);
+}
+
+ConfigFile ConfigFile::parse(const std::string& yaml, const std::string& name) {
+  auto s = std::make_shared<State>();
+  s->name = name;
+  try {
+    s->root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(name + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (s->root.IsNull()) s->root = YAML::Node(YAML::NodeType::Map);
+  if (!s->root.IsMap()) throw ConfigError(name + ": the document must be a map of sections");
+  return ConfigFile(s);
+}
+
+ConfigNode ConfigFile::root() const { return ConfigNode(state_, state_->root, ""); }
+const std::string& ConfigFile::name() const { return state_->name; }
+
+std::vector<std::string> ConfigFile::unusedKeys() const {
+  std::vector<std::string> unused;
+  // Walk maps; a key is used if read as a leaf, or opened as a section whose own keys are all used.
+  struct Walker {
+    const State& s;
+    std::vector<std::string>& out;
+    void walk(const YAML::Node& n, const std::string& path) {
+      for (auto it = n.begin(); it != n.end(); ++it) {
+        const std::string key = it->first.as<std::string>();
+        const std::string full = path.empty() ? key : path + "." + key;
+        if (s.leaves.count(full)) continue;
+        if (s.sections.count(full) && it->second.IsMap()) {
+          walk(it->second, full);
+          continue;
+        }
+        if (s.sections.count(full) && it->second.IsNull()) continue;  // empty section
+        out.push_back(full);
+      }
+    }
+  } w{*state_, unused};
+  w.walk(state_->root, "");
+  return unused;
+}
+
+void ConfigFile::checkAllKeysUsed() const {
+  const auto unused = unusedKeys();
+  if (!unused.empty()) {
+    std::string msg = state_->name + ": unknown key '" + unused.front() + "'";
+    if (unused.size() > 1) msg += " (and " + std::to_string(unused.size() - 1) + " more)";
+    throw ConfigError(msg + "; check the spelling against the documented keys");
+  }
+}
+
+bool ConfigNode::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
+
+YAML::Node ConfigNode::child(const std::string& key) const { return node_[key]; }
+
+const std::string& ConfigNode::fileName() const { return state_->name; }
+
+void ConfigNode::fail(const std::string& key, const std::string& what) const {
+  throw ConfigError(state_->name + ": " + fullKey(key) + ": " + what);
+}
+
+void ConfigNode::markLeaf(const std::string& key) const { state_->leaves.insert(fullKey(key)); }
+
+ConfigNode ConfigNode::section(const std::string& key) const {
+  state_->sections.insert(fullKey(key));
+  if (!has(key) || child(key).IsNull()) return ConfigNode(state_, YAML::Node(YAML::NodeType::Map), fullKey(key));
+  const YAML::Node n = child(key);
+  if (!n.IsMap()) fail(key, "expected a section (map of keys), got " + scalarText(n));
+  return ConfigNode(state_, n, fullKey(key));
+}
+
+ConfigNode ConfigNode::requireSection(const std::string& key) const {
+  if (!has(key)) fail(key, "required section is missing");
+  return section(key);
+}
+
+namespace {
+
+template <class T>
+T convertScalar(const ConfigNode& cn, const std::string& key, const YAML::Node& n, const char* what) {
+  if (!n.IsScalar()) cn.fail(key, std::string("expected ") + what + ", got " + scalarText(n));
+  try {
+    return n.as<T>();
+  } catch (const YAML::Exception&) {
+    cn.fail(key, std::string("expected ") + what + ", got '" + n.Scalar() + "'");
+  }
+}
+
+template <class T>
+std::vector<T> convertList(const ConfigNode& cn, const std::string& key, const YAML::Node& n, const char* what) {
+  if (!n.IsSequence()) cn.fail(key, std::string("expected a list of ") + what + ", got " + scalarText(n));
+  std::vector<T> out;
+  for (std::size_t i = 0; i < n.size(); ++i)
+    out.push_back(convertScalar<T>(cn, key + "[" + std::to_string(i) + "]", n[i], what));
+  return out;
+}
+
+}  // namespace
+
+void ConfigNode::readValue(const std::string& key, double& out) const {
+  out = convertScalar<double>(*this, key, child(key), "a number");
+  check(std::isfinite(out), key, "must be finite");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, float& out) const {
+  double d = 0;
+  readValue(key, d);
+  out = static_cast<float>(d);
+}
+void ConfigNode::readValue(const std::string& key, int& out) const {
+  out = convertScalar<int>(*this, key, child(key), "an integer");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, std::int64_t& out) const {
+  out = convertScalar<long long>(*this, key, child(key), "an integer");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, bool& out) const {
+  out = convertScalar<bool>(*this, key, child(key), "true or false");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, std::string& out) const {
+  out = convertScalar<std::string>(*this, key, child(key), "a string");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, std::vector<double>& out) const {
+  out = convertList<double>(*this, key, child(key), "numbers");
+  for (double v : out) check(std::isfinite(v), key, "values must be finite");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, std::vector<int>& out) const {
+  out = convertList<int>(*this, key, child(key), "integers");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, std::vector<std::string>& out) const {
+  out = convertList<std::string>(*this, key, child(key), "strings");
+  markLeaf(key);
+}
+void ConfigNode::readValue(const std::string& key, Eigen::Vector2d& out) const {
+  std::vector<double> v;
+  readValue(key, v);
+  check(v.size() == 2, key, "expected 2 numbers, got " + std::to_string(v.size()));
+  out = Eigen::Vector2d(v[0], v[1]);
+}
+void ConfigNode::readValue(const std::string& key, Eigen::Vector3d& out) const {
+  std::vector<double> v;
+  readValue(key, v);
+  check(v.size() == 3, key, "expected 3 numbers [x, y, z], got " + std::to_string(v.size()));
+  out = Eigen::Vector3d(v[0], v[1], v[2]);
+}
+void ConfigNode::readValue(const std::string& key, Eigen::Isometry3d& out) const {
+  std::vector<double> v;
+  readValue(key, v);
+  check(v.size() == 7, key, "expected a pose [x, y, z, qx, qy, qz, qw], got " + std::to_string(v.size()) + " numbers");
+  const double qn = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+  check(qn > 1e-6, key, "quaternion has zero norm");
+  check(std::abs(qn - 1.0) < 1e-3, key, "quaternion is not unit length (norm " + std::to_string(qn) + ")");
+  out = poseFromArray(v.data());
+}
+
+}  // namespace livo

@@ -1,0 +1,240 @@
+// libs/common: SO(3)/SE(3) against numeric differences and identities, config loading errors,
+// timing summaries.
+#include "livo/common/config.hpp"
+#include "livo/common/so3.hpp"
+#include "livo/common/timing.hpp"
+#include "livo/common/types.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace livo;
+
+namespace {
+
+Vec3 randomAxisAngle(std::mt19937& rng, double angle) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Vec3 a(n(rng), n(rng), n(rng));
+  return a.normalized() * angle;
+}
+
+// Numeric right Jacobian: columns of Log(Exp(phi)^-1 Exp(phi + eps e_i)) / eps.
+Mat3 numericRightJacobian(const Vec3& phi) {
+  const double eps = 1e-6;
+  Mat3 J;
+  for (int i = 0; i < 3; ++i) {
+    Vec3 d = Vec3::Zero();
+    d[i] = eps;
+    const Vec3 plus = logSO3(expSO3(phi).transpose() * expSO3(phi + d));
+    const Vec3 minus = logSO3(expSO3(phi).transpose() * expSO3(phi - d));
+    J.col(i) = (plus - minus) / (2 * eps);
+  }
+  return J;
+}
+
+}  // namespace
+
+TEST(So3, HatVeeAndCrossProduct) {
+  const Vec3 a(1, -2, 3), b(0.5, 4, -1);
+  EXPECT_TRUE((hat(a) * b).isApprox(a.cross(b)));
+  EXPECT_TRUE(vee(hat(a)).isApprox(a));
+}
+
+TEST(So3, ExpLogRoundTripAcrossAngles) {
+  std::mt19937 rng(7);
+  // From tiny angles through the series/closed-form switch up to (almost) pi.
+  for (double angle : {0.0, 1e-12, 1e-7, 1e-5, 1e-3, 0.1, 1.0, 2.5, 3.0, M_PI - 1e-4, M_PI - 1e-8}) {
+    for (int k = 0; k < 20; ++k) {
+      const Vec3 phi = randomAxisAngle(rng, angle);
+      const Mat3 R = expSO3(phi);
+      EXPECT_NEAR((R.transpose() * R - Mat3::Identity()).norm(), 0.0, 1e-12);
+      EXPECT_NEAR(R.determinant(), 1.0, 1e-12);
+      const Vec3 back = logSO3(R);
+      EXPECT_TRUE(expSO3(back).isApprox(R, 1e-9)) << "angle " << angle;
+      if (angle < M_PI - 1e-3) {
+        EXPECT_NEAR((back - phi).norm(), 0.0, 1e-9) << "angle " << angle;
+      }
+    }
+  }
+}
+
+TEST(So3, LogAtExactlyPi) {
+  const Vec3 axis = Vec3(1, 2, -1).normalized();
+  const Mat3 R = Eigen::AngleAxisd(M_PI, axis).toRotationMatrix();
+  const Vec3 phi = logSO3(R);
+  EXPECT_NEAR(phi.norm(), M_PI, 1e-9);
+  EXPECT_NEAR(std::abs(phi.normalized().dot(axis)), 1.0, 1e-9);
+}
+
+TEST(So3, ExpMatchesEigenAngleAxis) {
+  std::mt19937 rng(3);
+  for (int k = 0; k < 50; ++k) {
+    const Vec3 phi = randomAxisAngle(rng, 3.0 * (k + 1) / 50.0);
+    EXPECT_TRUE(expSO3(phi).isApprox(Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix(), 1e-12));
+  }
+}
+
+TEST(So3, RightJacobianMatchesNumeric) {
+  std::mt19937 rng(11);
+  for (double angle : {1e-9, 1e-4, 0.3, 1.5, 2.8}) {
+    const Vec3 phi = randomAxisAngle(rng, angle);
+    EXPECT_TRUE(rightJacobianSO3(phi).isApprox(numericRightJacobian(phi), 1e-6)) << "angle " << angle;
+    EXPECT_TRUE((rightJacobianSO3(phi) * rightJacobianInvSO3(phi)).isApprox(Mat3::Identity(), 1e-9));
+  }
+}
+
+TEST(So3, RightJacobianInverseFiniteNearPi) {
+  const Vec3 phi = Vec3(0, 0, 1) * (M_PI - 1e-9);
+  EXPECT_TRUE(rightJacobianInvSO3(phi).allFinite());
+}
+
+TEST(Se3, ExpLogRoundTrip) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 2.0);
+  for (int k = 0; k < 50; ++k) {
+    Vec6 xi;
+    for (int i = 0; i < 3; ++i) xi[i] = n(rng);
+    xi.tail<3>() = randomAxisAngle(rng, 0.06 * k);
+    const Pose T = expSE3(xi);
+    EXPECT_NEAR((logSE3(T) - xi).norm(), 0.0, 1e-9);
+  }
+}
+
+TEST(Se3, ExpIsMatrixExponential) {
+  // Oracle: exp of the 4x4 twist matrix by a long Taylor series.
+  Vec6 xi;
+  xi << 0.3, -1.2, 0.7, 0.4, -0.2, 0.9;
+  Eigen::Matrix4d X = Eigen::Matrix4d::Zero();
+  X.topLeftCorner<3, 3>() = hat(xi.tail<3>());
+  X.topRightCorner<3, 1>() = xi.head<3>();
+  Eigen::Matrix4d sum = Eigen::Matrix4d::Identity(), term = Eigen::Matrix4d::Identity();
+  for (int k = 1; k < 40; ++k) {
+    term = term * X / k;
+    sum += term;
+  }
+  EXPECT_TRUE(expSE3(xi).matrix().isApprox(sum, 1e-12));
+}
+
+TEST(Se3, PoseArrayRoundTrip) {
+  const double a[7] = {1, 2, 3, -0.5, 0.5, -0.5, 0.5};
+  const Pose T = poseFromArray(a);
+  const auto b = poseToArray(T);
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(a[i], b[i], 1e-12);
+  // Camera looking forward (DESIGN.md): optical axis z_cam = x_imu.
+  EXPECT_TRUE((T.linear() * Vec3::UnitZ()).isApprox(Vec3::UnitX()));
+  const double zero[7] = {0, 0, 0, 0, 0, 0, 0};
+  EXPECT_THROW(poseFromArray(zero), std::invalid_argument);
+}
+
+// ---- config ----
+
+struct ToyLioConfig {
+  double voxel_size_m = 0.5;
+  int max_layer = 2;
+  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
+  void load(const ConfigNode& n) {
+    n.require("voxel_size_m", voxel_size_m).get("max_layer", max_layer).get("T_imu_lidar", T_imu_lidar);
+    n.check(voxel_size_m > 0, "voxel_size_m", "must be > 0");
+  }
+};
+
+TEST(Config, ReadsKeysAndKeepsDefaults) {
+  auto f = ConfigFile::parse("lio:\n  voxel_size_m: 0.4\n  T_imu_lidar: [1, 2, 3, 0, 0, 0, 1]\n", "rig.yaml");
+  ToyLioConfig c;
+  c.load(f.root().section("lio"));
+  EXPECT_DOUBLE_EQ(c.voxel_size_m, 0.4);
+  EXPECT_EQ(c.max_layer, 2);
+  EXPECT_TRUE(c.T_imu_lidar.translation().isApprox(Vec3(1, 2, 3)));
+  EXPECT_NO_THROW(f.checkAllKeysUsed());
+}
+
+TEST(Config, MissingRequiredKeyNamesKeyAndFile) {
+  auto f = ConfigFile::parse("lio:\n  max_layer: 3\n", "rig.yaml");
+  ToyLioConfig c;
+  try {
+    c.load(f.root().section("lio"));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("rig.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("lio.voxel_size_m"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Config, UnknownKeyNamesKey) {
+  auto f = ConfigFile::parse("lio:\n  voxel_size_m: 0.5\n  voxle_size: 1\nimu:\n  rate: 3\n", "rig.yaml");
+  ToyLioConfig c;
+  c.load(f.root().section("lio"));
+  try {
+    f.checkAllKeysUsed();
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("lio.voxle_size"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("1 more"), std::string::npos) << msg;
+  }
+  const auto unused = f.unusedKeys();
+  ASSERT_EQ(unused.size(), 2u);
+  EXPECT_EQ(unused[1], "imu");
+}
+
+TEST(Config, WrongTypesAndBadValuesNameKey) {
+  {
+    auto f = ConfigFile::parse("lio:\n  voxel_size_m: abc\n", "a.yaml");
+    ToyLioConfig c;
+    EXPECT_THROW(c.load(f.root().section("lio")), ConfigError);
+  }
+  {
+    auto f = ConfigFile::parse("lio:\n  voxel_size_m: -1\n", "a.yaml");
+    ToyLioConfig c;
+    try {
+      c.load(f.root().section("lio"));
+      FAIL();
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("lio.voxel_size_m: must be > 0"), std::string::npos) << e.what();
+    }
+  }
+  {
+    auto f = ConfigFile::parse("lio:\n  voxel_size_m: 1\n  T_imu_lidar: [1, 2, 3]\n", "a.yaml");
+    ToyLioConfig c;
+    EXPECT_THROW(c.load(f.root().section("lio")), ConfigError);
+  }
+  {
+    auto f = ConfigFile::parse("lio: 5\n", "a.yaml");
+    EXPECT_THROW(f.root().section("lio"), ConfigError);
+  }
+  EXPECT_THROW(ConfigFile::parse("a: [1, 2\n", "bad.yaml"), ConfigError);
+  EXPECT_THROW(ConfigFile::load("/nonexistent/livo.yaml"), ConfigError);
+}
+
+// ---- timing ----
+
+TEST(Timing, SummaryStatistics) {
+  std::vector<double> v;
+  for (int i = 1; i <= 100; ++i) v.push_back(i);
+  const auto s = summarize(v);
+  EXPECT_EQ(s.count, 100u);
+  EXPECT_DOUBLE_EQ(s.mean, 50.5);
+  EXPECT_DOUBLE_EQ(s.median, 50.5);
+  EXPECT_DOUBLE_EQ(s.p95, 95.0);
+  EXPECT_DOUBLE_EQ(s.max, 100.0);
+  EXPECT_EQ(summarize({}).count, 0u);
+}
+
+TEST(Timing, PeakRssIsReadAndGrowsWithTouchedMemory) {
+  const auto before = peakRssBytes();
+  ASSERT_GT(before, 0u);
+  std::vector<char> big(64 << 20, 1);  // 64 MiB, touched
+  EXPECT_GE(peakRssBytes(), before + (32u << 20)) << static_cast<int>(big[12345]);
+}
+
+TEST(Types, TimeConversionsAndScanEnd) {
+  EXPECT_EQ(fromSeconds(1.2345675), 1234568);
+  LidarScan s;
+  s.utime = 1000000;
+  EXPECT_EQ(s.endUtime(), 1000000);
+  s.points.resize(2);
+  s.points[1].time_offset_s = 0.1f;
+  EXPECT_EQ(s.endUtime(), 1100000);
+}
