@@ -1,0 +1,53 @@
+// TUM trajectory files: one pose per line, "t x y z qx qy qz qw", t in seconds, the pose T_world_body
+// (maps body-frame points into the world frame). Lines starting with '#' and blank lines are skipped.
+#pragma once
+
+#include "livo/common/so3.hpp"
+
+#include <fstream>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace livo {
+
+struct StampedPose {
+  double t = 0.0;  ///< seconds
+  Pose T_world_body = Pose::Identity();
+};
+using Trajectory = std::vector<StampedPose>;
+
+/// Reads a TUM file. Throws std::runtime_error naming "file:line" on a malformed row (not exactly
+/// 8 numbers, non-finite values, a quaternion whose norm is not within `kTumQuatNormTolerance` of 1),
+/// on times that are not strictly increasing, and naming the file when it cannot be opened or holds
+/// no pose. Quaternions are normalised on read.
+Trajectory readTum(const std::string& path);
+/// Same from a stream; `name` stands for the file name in error messages.
+Trajectory readTum(std::istream& in, const std::string& name);
+
+/// Accepted |‖q‖ - 1| on read (files written with 4 decimals still pass; a typo does not).
+constexpr double kTumQuatNormTolerance = 1e-2;
+
+/// Writes one line "t x y z qx qy qz qw\n": t with 9 decimals, position and quaternion with 9
+/// decimals (nm / 1e-9 resolution, more than any estimator needs). qw >= 0.
+void writeTum(std::ostream& out, const StampedPose& pose);
+
+/// Appends poses to a TUM file, one flushed line per pose, so that a killed process loses at most the
+/// pose being written. Writes a '#' header line first.
+class TumWriter {
+ public:
+  /// Opens (truncates) `path`; throws std::runtime_error naming the file when it cannot.
+  explicit TumWriter(const std::string& path);
+  /// Writes and flushes one line; throws std::runtime_error when the write fails (disk full).
+  void write(const StampedPose& pose);
+  void write(double t, const Pose& T_world_body) { write(StampedPose{t, T_world_body}); }
+  std::size_t count() const { return count_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  std::size_t count_ = 0;
+};
+
+}  // namespace livo
