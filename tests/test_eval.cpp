@@ -3,6 +3,7 @@
 // when ../shared/data is present, a synthetic one always) moved by a known SE(3) / Sim(3) and perturbed
 // by Gaussian noise of known sigma must give back the transform, ATE RMSE = sigma sqrt(3) and
 // RPE RMSE = sigma sqrt(6) (difference of two independent noises).
+#include "livo/common/config.hpp"
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/report.hpp"
 
@@ -28,14 +29,18 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 const std::string kEurocGt = std::string(LIVO_SHARED_DATA) + "/euroc_v1_01_micro/groundtruth_V1_01_easy_tum.txt";
 
-// A fresh directory per test process for temporary files.
+// A fresh directory per test process for temporary files, removed at exit.
+struct TempDir {
+  fs::path path = fs::temp_directory_path() / ("livo_test_eval_" + std::to_string(::getpid()));
+  TempDir() { fs::create_directories(path); }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
 fs::path tempDir() {
-  static const fs::path dir = [] {
-    fs::path d = fs::temp_directory_path() / ("livo_test_eval_" + std::to_string(::getpid()));
-    fs::create_directories(d);
-    return d;
-  }();
-  return dir;
+  static const TempDir dir;
+  return dir.path;
 }
 
 std::string writeText(const std::string& name, const std::string& text) {
@@ -433,6 +438,21 @@ TEST(Evaluate, TimeOffsetAndClearErrors) {
   EvalConfig bad;
   bad.max_dt_s = -1;
   EXPECT_NE(errorOf([&] { evaluate(gt, gt, bad); }).find("max_dt_s"), std::string::npos);
+}
+
+TEST(Evaluate, ConfigLoadsKeysAndRejectsBadValues) {
+  const ConfigFile file = ConfigFile::parse(
+      "eval: {max_dt_s: 0.02, est_time_offset_s: -0.5, with_scale: true, rpe_deltas_m: [1, 4]}\n", "eval.yaml");
+  EvalConfig config;
+  config.load(file.root().section("eval"));
+  EXPECT_DOUBLE_EQ(config.max_dt_s, 0.02);
+  EXPECT_DOUBLE_EQ(config.est_time_offset_s, -0.5);
+  EXPECT_TRUE(config.with_scale);
+  EXPECT_EQ(config.rpe_deltas_m, (std::vector<double>{1.0, 4.0}));
+  EXPECT_NO_THROW(file.checkAllKeysUsed());
+  const ConfigFile bad = ConfigFile::parse("eval: {rpe_deltas_m: [1, -2]}\n", "bad.yaml");
+  const std::string msg = errorOf([&] { EvalConfig().load(bad.root().section("eval")); });
+  EXPECT_NE(msg.find("bad.yaml: eval.rpe_deltas_m"), std::string::npos) << msg;
 }
 
 // ---------------------------------------------------------------- the livo-eval binary

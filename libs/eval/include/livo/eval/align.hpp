@@ -40,7 +40,9 @@ struct Sim3 {
 /// sum_i |dst_i - (s R src_i + t)|^2. Reflections are excluded (S = diag(1, 1, -1) when
 /// det(U) det(V) < 0, eq. 39). Throws std::invalid_argument when fewer than 3 points are given, the
 /// sizes differ, or (with scale) all source points coincide. Collinear points leave the rotation about
-/// the line unobservable; the result is then one of the minimisers.
+/// the line unobservable; the result is then one of the minimisers. With zero-mean noise of variance
+/// sigma^2 per axis on src, the scale is biased low by the factor var_src / (var_src + 3 sigma^2)
+/// (errors in variables); rotation and translation of an SE(3) fit are not biased by it.
 Sim3 umeyama(const std::vector<Vec3>& src, const std::vector<Vec3>& dst, bool with_scale);
 
 }  // namespace livo
