@@ -1,0 +1,154 @@
+#include "livo/map/voxel_map.hpp"
+
+#include "octree_node.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace livo {
+namespace {
+constexpr std::size_t kHeapOverhead = 16;  // see VoxelMap::bytes()
+// |p / s| below 2^52 keeps floor() exact and the key far from int64 overflow.
+constexpr double kMaxScaled = 4503599627370496.0;
+}  // namespace
+
+VoxelMap::VoxelMap(VoxelMapConfig config) : config_(std::move(config)) {
+  if (!(config_.voxel_size_m > 0.0)) throw std::invalid_argument("VoxelMap: voxel_size_m must be > 0");
+  if (config_.max_layer < 0 || config_.max_layer > 6)
+    throw std::invalid_argument("VoxelMap: max_layer must be in [0, 6]");
+  if (config_.max_points < 3) throw std::invalid_argument("VoxelMap: max_points must be >= 3");
+  if (config_.refit_new_points < 1 || config_.refit_new_points > 60000)
+    throw std::invalid_argument("VoxelMap: refit_new_points must be in [1, 60000]");
+  for (int l = 0; l <= config_.max_layer; ++l) {
+    if (config_.initNum(l) < 2)
+      throw std::invalid_argument("VoxelMap: layer_init_num[" + std::to_string(l) + "] must be >= 2");
+  }
+}
+
+VoxelMap::~VoxelMap() = default;
+VoxelMap::VoxelMap(VoxelMap&&) noexcept = default;
+VoxelMap& VoxelMap::operator=(VoxelMap&&) noexcept = default;
+
+std::size_t VoxelMap::insert(const std::vector<PointWithCov>& points) {
+  const double s = config_.voxel_size_m;
+  std::size_t taken = 0;
+  for (const PointWithCov& pw : points) {
+    const Vec3& p = pw.p_world;
+    if (!p.allFinite() || (p.cwiseAbs() / s).maxCoeff() >= kMaxScaled || !pw.cov_world.allFinite()) continue;
+    const VoxelKey key = keyOf(p);
+    auto it = roots_.find(key);
+    if (it == roots_.end()) {
+      it = roots_.emplace(key, std::make_unique<OctreeNode>(key.center(s), 0)).first;
+    }
+    it->second->insert(MapPoint(pw), config_);
+    ++taken;
+  }
+  return taken;
+}
+
+bool VoxelMap::neighbourKey(const Vec3& p, VoxelKey& out) const {
+  // Position inside the voxel in units of the voxel edge, in [0, 1): metric, not index, coordinates
+  // (FAST-LIVO2 mixes the two, ALGORITHMS.md section 2 [quirk]).
+  const Vec3 scaled = p / config_.voxel_size_m;
+  const Vec3 fl(std::floor(scaled.x()), std::floor(scaled.y()), std::floor(scaled.z()));
+  const Vec3 frac = scaled - fl;
+  out = keyOf(p);
+  bool any = false;
+  std::int64_t* k[3] = {&out.x, &out.y, &out.z};
+  for (int i = 0; i < 3; ++i) {
+    if (frac[i] > 0.75) {
+      ++*k[i];
+      any = true;
+    } else if (frac[i] < 0.25) {
+      --*k[i];
+      any = true;
+    }
+  }
+  return any;
+}
+
+bool VoxelMap::searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const {
+  const auto it = roots_.find(key);
+  if (it == roots_.end()) return false;
+  const Vec3& p = pw.p_world;
+  const double sigma_num = config_.sigma_num;
+  bool found = false;
+  it->second->forEachPlane([&](const Plane& plane) {
+    const double dist = plane.signedDistance(p);
+    // In-plane distance gate: sqrt(|p - q|^2 - d^2) <= sigma_num * sqrt(lambda_max).
+    const double in_plane_sq = std::max((p - plane.center).squaredNorm() - dist * dist, 0.0);
+    const double r_gate = sigma_num * plane.radius;
+    if (in_plane_sq > r_gate * r_gate) return;
+    const double sigma_l = pointToPlaneVariance(plane, p, pw.cov_world);
+    if (!(sigma_l > 0.0)) return;
+    if (dist * dist >= sigma_num * sigma_num * sigma_l) return;  // |d| < sigma_num sqrt(sigma_l)
+    const double prob = std::exp(-0.5 * dist * dist / sigma_l) / std::sqrt(sigma_l);
+    if (found && prob <= out.probability) return;
+    out.plane = &plane;
+    out.distance = dist;
+    out.sigma_l = sigma_l;
+    out.probability = prob;
+    found = true;
+  });
+  return found;
+}
+
+bool VoxelMap::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
+  out = PlaneMatch{};
+  const Vec3& p = pw.p_world;
+  if (!p.allFinite() || (p.cwiseAbs() / config_.voxel_size_m).maxCoeff() >= kMaxScaled) return false;
+  if (searchVoxel(keyOf(p), pw, out)) return true;
+  VoxelKey near;
+  if (!neighbourKey(p, near)) return false;
+  return searchVoxel(near, pw, out);
+}
+
+std::size_t VoxelMap::numPlanes() const {
+  std::size_t n = 0;
+  for (const auto& kv : roots_) kv.second->forEachPlane([&n](const Plane&) { ++n; });
+  return n;
+}
+
+VoxelMapStats VoxelMap::stats() const {
+  VoxelMapStats s;
+  s.root_voxels = roots_.size();
+  // Buckets, then per root: the hash node (next pointer, cached hash, key, unique_ptr) + malloc.
+  s.bytes = roots_.bucket_count() * sizeof(void*);
+  const std::size_t hash_node = sizeof(void*) + sizeof(std::size_t) + sizeof(VoxelKey) +
+                                sizeof(std::unique_ptr<OctreeNode>) + kHeapOverhead;
+  s.bytes += roots_.size() * hash_node;
+  for (const auto& kv : roots_) kv.second->accumulate(s);
+  return s;
+}
+
+std::size_t VoxelMap::bytes() const { return stats().bytes; }
+
+void VoxelMap::forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const {
+  for (const auto& kv : roots_) {
+    const VoxelKey& key = kv.first;
+    kv.second->forEachPlane([&](const Plane& plane) { f(key, plane); });
+  }
+}
+
+std::size_t VoxelMap::removeOutsideBox(const Vec3& center, double half_edge_m) {
+  std::size_t removed = 0;
+  for (auto it = roots_.begin(); it != roots_.end();) {
+    const Vec3 c = it->first.center(config_.voxel_size_m);
+    if (((c - center).cwiseAbs().array() > half_edge_m).any()) {
+      it = roots_.erase(it);
+      ++removed;
+    } else {
+      ++it;
+    }
+  }
+  return removed;
+}
+
+std::size_t VoxelMap::removeVoxel(const VoxelKey& key) { return roots_.erase(key); }
+
+void VoxelMap::clear() { roots_.clear(); }
+
+}  // namespace livo
