@@ -3,6 +3,7 @@
 // when ../shared/data is present, a synthetic one always) moved by a known SE(3) / Sim(3) and perturbed
 // by Gaussian noise of known sigma must give back the transform, ATE RMSE = sigma sqrt(3) and
 // RPE RMSE = sigma sqrt(6) (difference of two independent noises).
+// livo-test-bins: livo-eval
 #include "livo/common/config.hpp"
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/report.hpp"

@@ -1,0 +1,14 @@
+// Camera images of any supported pixel format to 8-bit gray (OpenCV for decoding and color).
+#pragma once
+
+#include "livo/common/types.hpp"
+
+#include <string>
+
+namespace livo {
+
+/// Converts `in` (GRAY8, GRAY16 (scaled by 1/256), RGB8, BGR8, JPEG, PNG) to a packed GRAY8 image.
+/// Returns false with a message in `*error` when the data cannot be decoded.
+bool toGray8(const Image& in, Image& out, std::string* error);
+
+}  // namespace livo

@@ -1,0 +1,71 @@
+// The output directory of a run (livo-run --out DIR, livo-exporter --out DIR):
+//   trajectory.tum  IMU pose in the world frame per frame (flushed per line)
+//   frames.csv      one row per frame: t, lio_ms, vio_ms, total_ms, sigma_min, degenerate, visual_used,
+//                   n_points, n_planes_matched, n_visual_points (flushed per row)
+//   stats.json      frames, visual_frames, degenerate_frames, timing_ms {lio, vio, map, total} x
+//                   {mean, median, p95, max}, peak_rss_mb, map {local_voxels, visual_points_local,
+//                   visual_points_longterm, bytes}, plus run-specific counters
+#pragma once
+
+#include "livo/common/so3.hpp"
+#include "livo/common/types.hpp"
+#include "livo/eval/tum.hpp"
+
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace livo {
+
+/// What one frame reports for the output files.
+struct FrameRecord {
+  Utime utime = 0;
+  bool has_pose = false;  ///< false before initialisation: no trajectory line
+  Pose T_world_imu = Pose::Identity();
+  double lio_ms = 0, vio_ms = 0, map_ms = 0, total_ms = 0;
+  double sigma_min = 0;
+  bool degenerate = false;
+  bool visual_used = false;
+  int n_points = 0;
+  int n_planes_matched = 0;
+  int n_visual_points = 0;
+};
+
+/// Map size at the end of a run.
+struct MapSummary {
+  std::uint64_t local_voxels = 0;
+  std::uint64_t visual_points_local = 0;
+  std::uint64_t visual_points_longterm = 0;
+  std::uint64_t bytes = 0;
+};
+
+class RunOutputs {
+ public:
+  /// Creates `dir` (and parents) and opens trajectory.tum and frames.csv; throws std::runtime_error
+  /// naming the path on failure.
+  explicit RunOutputs(const std::string& dir);
+
+  void addFrame(const FrameRecord& f);
+  /// Writes stats.json (atomically: temp file + rename). `counters` are extra integer counters
+  /// (e.g. preprocessing drops), `notes` extra strings.
+  void writeStats(const MapSummary& map, double peak_rss_mb,
+                  const std::map<std::string, double>& counters = {},
+                  const std::map<std::string, std::string>& notes = {}) const;
+
+  std::size_t frames() const { return records_.size(); }
+  std::size_t posesWritten() const { return tum_.count(); }
+  const std::string& dir() const { return dir_; }
+  /// Human-readable summary (frames, timings) for stdout.
+  std::string summary(double peak_rss_mb) const;
+
+ private:
+  std::string dir_;
+  TumWriter tum_;
+  std::ofstream csv_;
+  std::vector<FrameRecord> records_;
+};
+
+}  // namespace livo

@@ -1,0 +1,126 @@
+#include "livo/io/run_outputs.hpp"
+
+#include "livo/common/timing.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace livo {
+
+namespace {
+
+std::string ensureDir(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create output directory: " + ec.message());
+  return dir;
+}
+
+std::string jsonEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\', o += c;
+    else if (static_cast<unsigned char>(c) < 0x20) o += ' ';
+    else o += c;
+  }
+  return o;
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream os;
+  os << std::setprecision(10) << v;
+  return os.str();
+}
+
+void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bool last) {
+  os << "    \"" << name << "\": {\"mean\": " << num(s.mean) << ", \"median\": " << num(s.median)
+     << ", \"p95\": " << num(s.p95) << ", \"max\": " << num(s.max) << "}" << (last ? "\n" : ",\n");
+}
+
+}  // namespace
+
+RunOutputs::RunOutputs(const std::string& dir)
+    : dir_(ensureDir(dir)), tum_(dir + "/trajectory.tum"), csv_(dir + "/frames.csv") {
+  if (!csv_) throw std::runtime_error(dir + "/frames.csv: cannot open for writing");
+  csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points\n";
+  csv_.flush();
+}
+
+void RunOutputs::addFrame(const FrameRecord& f) {
+  records_.push_back(f);
+  if (f.has_pose) tum_.write(toSeconds(f.utime), f.T_world_imu);
+  csv_ << std::fixed << std::setprecision(6) << toSeconds(f.utime) << std::setprecision(3) << ',' << f.lio_ms << ','
+       << f.vio_ms << ',' << f.total_ms << ',' << std::setprecision(5) << f.sigma_min << ',' << int(f.degenerate)
+       << ',' << int(f.visual_used) << ',' << f.n_points << ',' << f.n_planes_matched << ',' << f.n_visual_points
+       << '\n';
+  csv_.flush();
+  if (!csv_) throw std::runtime_error(dir_ + "/frames.csv: write failed");
+}
+
+void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std::map<std::string, double>& counters,
+                            const std::map<std::string, std::string>& notes) const {
+  std::vector<double> lio, vio, mp, total;
+  std::size_t visual = 0, degenerate = 0;
+  for (const auto& r : records_) {
+    lio.push_back(r.lio_ms);
+    vio.push_back(r.vio_ms);
+    mp.push_back(r.map_ms);
+    total.push_back(r.total_ms);
+    visual += r.visual_used;
+    degenerate += r.degenerate;
+  }
+  const std::string tmp = dir_ + "/stats.json.tmp";
+  {
+    std::ofstream os(tmp);
+    if (!os) throw std::runtime_error(tmp + ": cannot open for writing");
+    os << "{\n  \"frames\": " << records_.size() << ",\n  \"poses\": " << tum_.count()
+       << ",\n  \"visual_frames\": " << visual << ",\n  \"degenerate_frames\": " << degenerate
+       << ",\n  \"timing_ms\": {\n";
+    writeSummary(os, "lio", summarize(lio), false);
+    writeSummary(os, "vio", summarize(vio), false);
+    writeSummary(os, "map", summarize(mp), false);
+    writeSummary(os, "total", summarize(total), true);
+    os << "  },\n  \"peak_rss_mb\": " << num(peak_rss_mb) << ",\n  \"map\": {\"local_voxels\": " << map.local_voxels
+       << ", \"visual_points_local\": " << map.visual_points_local
+       << ", \"visual_points_longterm\": " << map.visual_points_longterm << ", \"bytes\": " << map.bytes << "}";
+    if (!counters.empty()) {
+      os << ",\n  \"counters\": {";
+      bool first = true;
+      for (const auto& [k, v] : counters) {
+        os << (first ? "" : ", ") << "\"" << jsonEscape(k) << "\": " << num(v);
+        first = false;
+      }
+      os << "}";
+    }
+    for (const auto& [k, v] : notes) os << ",\n  \"" << jsonEscape(k) << "\": \"" << jsonEscape(v) << "\"";
+    os << "\n}\n";
+    if (!os) throw std::runtime_error(tmp + ": write failed");
+  }
+  std::filesystem::rename(tmp, dir_ + "/stats.json");
+}
+
+std::string RunOutputs::summary(double peak_rss_mb) const {
+  std::vector<double> lio, vio, total;
+  std::size_t visual = 0;
+  for (const auto& r : records_) {
+    lio.push_back(r.lio_ms);
+    vio.push_back(r.vio_ms);
+    total.push_back(r.total_ms);
+    visual += r.visual_used;
+  }
+  const auto l = summarize(lio), v = summarize(vio), t = summarize(total);
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(2);
+  os << "frames " << records_.size() << " (poses " << tum_.count() << ", visual updates " << visual << ")\n";
+  os << "time per frame [ms]  lio median " << l.median << " p95 " << l.p95 << " | vio median " << v.median
+     << " | total mean " << t.mean << " median " << t.median << " p95 " << t.p95 << " max " << t.max << "\n";
+  os << "peak RSS " << peak_rss_mb << " MB\n";
+  return os.str();
+}
+
+}  // namespace livo
