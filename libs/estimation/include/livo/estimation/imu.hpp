@@ -1,0 +1,86 @@
+// IMU static initialisation, forward propagation with covariance, and the per-sample trace used to
+// undistort LiDAR points (ALGORITHMS.md section 1).
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/state.hpp"
+
+#include <string>
+#include <vector>
+
+namespace livo {
+
+struct ImuConfig {
+  double gyro_noise = 1.7e-3;       ///< rad/s/sqrt(Hz), continuous white-noise density
+  double accel_noise = 2.0e-2;      ///< m/s^2/sqrt(Hz)
+  double gyro_bias_walk = 1.9e-4;   ///< rad/s^2/sqrt(Hz)
+  double accel_bias_walk = 3.0e-3;  ///< m/s^3/sqrt(Hz)
+  double noise_scale = 1.0;         ///< multiplies the four densities (inflate for unmodelled effects)
+  double inv_exposure_walk = 0.1;   ///< 1/sqrt(s), random walk of tau
+  double gravity_m_s2 = 9.81;       ///< local gravity magnitude
+  int init_samples = 30;            ///< samples averaged by the static initialisation
+  double init_max_gyro_std = 0.05;  ///< rad/s: above this the window is not static
+  double init_max_accel_std = 0.3;  ///< m/s^2 (after scaling to m/s^2)
+  int init_max_samples = 2000;      ///< give up waiting for a static window after this many samples
+  bool gravity_align = true;        ///< rotate the world so that gravity is (0, 0, -g) (world z up)
+
+  /// Reads the `imu` section (noise densities, init_samples, ...).
+  void load(const ConfigNode& imu);
+};
+
+/// Averages the first static IMU samples: gyro bias, gravity direction, accelerometer scale (g units).
+class ImuInitializer {
+ public:
+  explicit ImuInitializer(const ImuConfig& cfg) : cfg_(cfg) {}
+  /// Adds a sample; returns true once initialised.
+  bool add(const ImuSample& s);
+  bool done() const { return done_; }
+  /// Scale applied to every accelerometer reading: g / |mean accel| (about 9.81 for g-unit IMUs).
+  double accelScale() const { return accel_scale_; }
+  /// Initial state: R from gravity alignment (or identity), zero position and velocity, bg = mean gyro.
+  NavState initialState() const { return state_; }
+  /// True when the window was not static but the initialiser gave up waiting (warning for the user).
+  bool forced() const { return forced_; }
+  std::string describe() const;
+
+ private:
+  ImuConfig cfg_;
+  std::vector<ImuSample> window_;
+  int seen_ = 0;
+  bool done_ = false, forced_ = false;
+  double accel_scale_ = 1.0;
+  NavState state_;
+};
+
+/// State at one IMU sample, with the unbiased rate and world acceleration used for the interval that
+/// starts there; used for backward undistortion.
+struct ImuTracePoint {
+  Utime utime = 0;
+  Mat3 R_world_imu = Mat3::Identity();
+  Vec3 p_world_imu = Vec3::Zero();
+  Vec3 v_world = Vec3::Zero();
+  Vec3 acc_world = Vec3::Zero();  ///< R a_hat + g over the interval
+  Vec3 omega = Vec3::Zero();      ///< unbiased angular rate over the interval, body frame
+};
+
+/// Forward propagation of state and covariance through IMU samples (mid-point integration).
+class ImuPropagator {
+ public:
+  ImuPropagator(const ImuConfig& cfg, double accel_scale) : cfg_(cfg), accel_scale_(accel_scale) {}
+
+  /// Propagates `x` (at x.utime) and `P` to `t_end` using the samples (time ordered, covering
+  /// [x.utime, t_end] as far as available; the last sample is held beyond its time). Appends one trace
+  /// point per interval to `trace` (cleared first) and a final one at t_end.
+  void propagate(NavState& x, StateCov& P, const std::vector<ImuSample>& samples, Utime t_end,
+                 std::vector<ImuTracePoint>* trace) const;
+
+  /// Pose at time t from a trace (t within or slightly outside it: extrapolates with the end intervals).
+  static Pose poseAt(const std::vector<ImuTracePoint>& trace, Utime t);
+
+ private:
+  void step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt, ImuTracePoint* tp) const;
+  ImuConfig cfg_;
+  double accel_scale_;
+};
+
+}  // namespace livo

@@ -1,0 +1,73 @@
+// The LiDAR-inertial part of the per-frame pipeline: initialise, propagate, undistort, downsample,
+// iterated point-to-plane update, degeneracy metric, map insertion.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/imu.hpp"
+#include "livo/estimation/lio_update.hpp"
+#include "livo/map/voxel_map.hpp"
+
+#include <memory>
+#include <string>
+
+namespace livo {
+
+struct LioOdometryConfig {
+  ImuConfig imu;
+  LioConfig lio;
+  VoxelMapConfig map;
+  Pose T_imu_lidar = Pose::Identity();
+  int min_matches = 20;  ///< fewer matched points: the update is skipped and the frame flagged
+
+  /// Reads the rig sections imu, lidar (T_imu_lidar required) and the lio / voxel_map sections.
+  void load(const ConfigNode& root);
+};
+
+/// What one frame produced (LiDAR-inertial part).
+struct LioFrameResult {
+  Utime utime = 0;
+  bool initialized = false;  ///< false while the IMU initialisation is collecting samples
+  bool lio_ok = false;       ///< the LiDAR update ran with enough matches
+  bool map_started = false;  ///< this frame created the first map content
+  NavState state;            ///< posterior at the frame time
+  StateCov P = StateCov::Zero();
+  int n_raw_points = 0;
+  int n_points = 0;          ///< downsampled points used
+  int n_matched = 0;
+  int iterations = 0;
+  double sigma_min = 0.0;    ///< degeneracy metric of the matched normals
+  double rms_residual_m = 0.0;
+  double lio_ms = 0.0;       ///< propagation + undistortion + update
+  double map_ms = 0.0;       ///< map insertion
+  std::vector<BodyPoint> points;  ///< the frame's downsampled points (IMU frame at utime)
+};
+
+class LioOdometry {
+ public:
+  explicit LioOdometry(LioOdometryConfig cfg);
+  /// Processes one frame in time order. Frames before the IMU is initialised only feed it.
+  LioFrameResult process(const Frame& frame);
+
+  const VoxelMap& map() const { return map_; }
+  VoxelMap& map() { return map_; }
+  const NavState& state() const { return x_; }
+  const StateCov& covariance() const { return P_; }
+  bool initialized() const { return init_.done(); }
+  const std::string& initMessage() const { return init_message_; }
+
+ private:
+  std::vector<BodyPoint> preparePoints(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const;
+  void insertIntoMap(const std::vector<BodyPoint>& pts);
+
+  LioOdometryConfig cfg_;
+  ImuInitializer init_;
+  std::unique_ptr<ImuPropagator> propagator_;
+  VoxelMap map_;
+  NavState x_;
+  StateCov P_ = initialCovariance();
+  Utime last_imu_fed_ = -1;
+  bool map_started_ = false;
+  std::string init_message_;
+};
+
+}  // namespace livo

@@ -1,0 +1,68 @@
+// Iterated ESIKF update with point-to-plane residuals against the voxel plane map
+// (ALGORITHMS.md section 2), and the degeneracy metric of the matched plane normals.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/state.hpp"
+#include "livo/map/voxel_map.hpp"
+
+#include <vector>
+
+namespace livo {
+
+struct LioConfig {
+  int max_iterations = 5;
+  double range_noise_m = 0.02;        ///< sigma_r of a LiDAR return (lidar.range_noise_m)
+  double beam_noise_deg = 0.05;       ///< sigma_theta of a LiDAR return, degrees (lidar.beam_noise_deg)
+  double residual_floor_var = 1e-4;   ///< m^2 added to every residual variance (FAST-LIVO2 uses 1e-3)
+  double converge_rot_deg = 0.01;     ///< |dtheta| below this ...
+  double converge_pos_m = 1.5e-4;     ///< ... and |dp| below this: converged
+  double downsample_m = 0.1;          ///< voxel-grid leaf of the undistorted sweep, m
+  int max_points = 20000;             ///< cap of downsampled points per frame (uniform subsampling beyond)
+
+  /// Reads the `lio` section (and range/beam noise from the `lidar` section).
+  void load(const ConfigNode& root);
+};
+
+/// One downsampled, undistorted point of the current sweep.
+struct BodyPoint {
+  Vec3 p_imu = Vec3::Zero();     ///< IMU frame at the frame time, m
+  Mat3 cov_imu = Mat3::Zero();   ///< measurement covariance in the IMU frame, m^2
+};
+
+/// One residual row of the update: z = n^T (R p + t) + d.
+struct PlaneResidual {
+  Vec3 normal = Vec3::Zero();
+  double residual = 0.0;    ///< signed distance, m
+  double variance = 0.0;    ///< m^2
+  Eigen::Matrix<double, 6, 1> h = Eigen::Matrix<double, 6, 1>::Zero();  ///< d z / d [dtheta, dp]
+};
+
+struct LioUpdateResult {
+  int iterations = 0;
+  bool converged = false;
+  int matched = 0;                 ///< points with a plane at the final iteration
+  std::vector<Vec3> matched_normals;
+  double rms_residual_m = 0.0;
+};
+
+/// Point-to-plane residual and its Jacobian for one point at state x (analytic):
+///   z = n^T (R p_b + t) + d, dz/ddtheta = -n^T R [p_b]x = ([p_b]x R^T n)^T, dz/ddp = n^T.
+PlaneResidual planeResidual(const NavState& x, const Vec3& p_imu, const Vec3& normal, double d);
+
+/// World covariance of a body point: R S_b R^T + R [p]x P_thth [p]x^T R^T + P_pp (the reference code
+/// omits R in the middle term; ALGORITHMS.md section 2 [quirk]).
+Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp);
+
+/// Iterated update: re-associates every point with the map in every iteration (information form,
+/// ALGORITHMS.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the
+/// posterior on return. With no match at all the state is left unchanged.
+LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const VoxelMap& map,
+                            const LioConfig& cfg);
+
+/// Degeneracy metric (ALGORITHMS.md, top): eigenvalues lambda of M = sum n n^T normalised by their L2
+/// norm; returns the smallest, in [0, 1/sqrt(3)] (0 for no normals). This project reads the paper's
+/// "Normalize" as lambda / ||lambda||_2.
+double degeneracySigmaMin(const std::vector<Vec3>& normals);
+
+}  // namespace livo

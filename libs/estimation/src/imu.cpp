@@ -1,0 +1,186 @@
+#include "livo/estimation/imu.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace livo {
+
+void ImuConfig::load(const ConfigNode& n) {
+  n.get("gyro_noise", gyro_noise).get("accel_noise", accel_noise);
+  n.get("gyro_bias_walk", gyro_bias_walk).get("accel_bias_walk", accel_bias_walk);
+  n.get("noise_scale", noise_scale).get("inv_exposure_walk", inv_exposure_walk);
+  n.get("gravity_m_s2", gravity_m_s2).get("init_samples", init_samples);
+  n.get("init_max_gyro_std", init_max_gyro_std).get("init_max_accel_std", init_max_accel_std);
+  n.get("init_max_samples", init_max_samples).get("gravity_align", gravity_align);
+  for (const char* k : {"gyro_noise", "accel_noise", "gyro_bias_walk", "accel_bias_walk"}) {
+    double v = 0;
+    n.get(k, v);
+    n.check(v >= 0, k, "must be >= 0");
+  }
+  n.check(noise_scale > 0, "noise_scale", "must be > 0");
+  n.check(init_samples >= 5, "init_samples", "must be >= 5");
+  n.check(gravity_m_s2 > 5 && gravity_m_s2 < 15, "gravity_m_s2", "must be about 9.8");
+}
+
+// ---------------- initialisation ----------------
+
+bool ImuInitializer::add(const ImuSample& s) {
+  if (done_) return true;
+  window_.push_back(s);
+  ++seen_;
+  const std::size_t n = static_cast<std::size_t>(cfg_.init_samples);
+  if (window_.size() > n) window_.erase(window_.begin());
+  if (window_.size() < n) return false;
+
+  Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
+  for (const auto& w : window_) {
+    mg += w.gyro;
+    ma += w.accel;
+  }
+  mg /= double(n);
+  ma /= double(n);
+  const double norm_a = ma.norm();
+  if (!(norm_a > 1e-3)) return false;  // no usable gravity yet
+  const double scale = cfg_.gravity_m_s2 / norm_a;
+  double var_g = 0, var_a = 0;
+  for (const auto& w : window_) {
+    var_g += (w.gyro - mg).squaredNorm();
+    var_a += ((w.accel - ma) * scale).squaredNorm();
+  }
+  const bool is_static = std::sqrt(var_g / n) < cfg_.init_max_gyro_std && std::sqrt(var_a / n) < cfg_.init_max_accel_std;
+  if (!is_static && seen_ < cfg_.init_max_samples) return false;
+  forced_ = !is_static;
+
+  accel_scale_ = scale;
+  state_ = NavState();
+  state_.utime = window_.back().utime;
+  state_.bg = mg;
+  // Gravity: the accelerometer at rest measures -g in the body frame (specific force).
+  const Vec3 up_body = ma.normalized();
+  if (cfg_.gravity_align) {
+    // R_world_imu with R * up_body = +z and no yaw component (shortest rotation).
+    state_.R_world_imu = Quat::FromTwoVectors(up_body, Vec3::UnitZ()).toRotationMatrix();
+    state_.g_world = Vec3(0, 0, -cfg_.gravity_m_s2);
+  } else {
+    state_.R_world_imu = Mat3::Identity();
+    state_.g_world = -up_body * cfg_.gravity_m_s2;
+  }
+  done_ = true;
+  return true;
+}
+
+std::string ImuInitializer::describe() const {
+  std::ostringstream os;
+  os << "IMU initialised from " << window_.size() << " samples" << (forced_ ? " (NOT static: forced)" : "")
+     << ", accel scale " << accel_scale_ << (std::abs(accel_scale_ - 1.0) > 0.2 ? " (g units detected)" : "")
+     << ", gyro bias [" << state_.bg.transpose() << "] rad/s";
+  return os.str();
+}
+
+// ---------------- propagation ----------------
+
+void ImuPropagator::step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt,
+                         ImuTracePoint* tp) const {
+  const Vec3 w = gyro - x.bg;                 // unbiased rate
+  const Vec3 a = accel * accel_scale_ - x.ba;  // unbiased specific force
+  const Mat3 R0 = x.R_world_imu;
+
+  // Transition of the error state (identity except the blocks below), evaluated at the interval start.
+  StateCov F = StateCov::Identity();
+  using namespace sidx;
+  F.block<3, 3>(kRot, kRot) = expSO3(-w * dt);
+  F.block<3, 3>(kRot, kBg) = -rightJacobianSO3(w * dt) * dt;
+  F.block<3, 3>(kPos, kVel) = Mat3::Identity() * dt;
+  F.block<3, 3>(kPos, kRot) = -0.5 * R0 * hat(a) * dt * dt;
+  F.block<3, 3>(kPos, kBa) = -0.5 * R0 * dt * dt;
+  F.block<3, 3>(kPos, kGrav) = 0.5 * Mat3::Identity() * dt * dt;
+  F.block<3, 3>(kVel, kRot) = -R0 * hat(a) * dt;
+  F.block<3, 3>(kVel, kBa) = -R0 * dt;
+  F.block<3, 3>(kVel, kGrav) = Mat3::Identity() * dt;
+
+  // Discretised continuous-time noise densities (variance = density^2 * dt).
+  const double s = cfg_.noise_scale * cfg_.noise_scale;
+  StateCov Q = StateCov::Zero();
+  Q.block<3, 3>(kRot, kRot).diagonal().setConstant(s * cfg_.gyro_noise * cfg_.gyro_noise * dt);
+  Q.block<3, 3>(kVel, kVel).diagonal().setConstant(s * cfg_.accel_noise * cfg_.accel_noise * dt);
+  Q.block<3, 3>(kPos, kPos).diagonal().setConstant(s * cfg_.accel_noise * cfg_.accel_noise * dt * dt * dt / 3.0);
+  Q.block<3, 3>(kBg, kBg).diagonal().setConstant(s * cfg_.gyro_bias_walk * cfg_.gyro_bias_walk * dt);
+  Q.block<3, 3>(kBa, kBa).diagonal().setConstant(s * cfg_.accel_bias_walk * cfg_.accel_bias_walk * dt);
+  Q(kExposure, kExposure) = cfg_.inv_exposure_walk * cfg_.inv_exposure_walk * dt;
+  P = F * P * F.transpose() + Q;
+
+  // Nominal state: constant rate and world acceleration over the interval.
+  const Vec3 acc_world = R0 * a + x.g_world;
+  if (tp) {
+    tp->utime = x.utime;
+    tp->R_world_imu = R0;
+    tp->p_world_imu = x.p_world_imu;
+    tp->v_world = x.v_world;
+    tp->acc_world = acc_world;
+    tp->omega = w;
+  }
+  x.p_world_imu += x.v_world * dt + 0.5 * acc_world * dt * dt;
+  x.v_world += acc_world * dt;
+  x.R_world_imu = R0 * expSO3(w * dt);
+}
+
+void ImuPropagator::propagate(NavState& x, StateCov& P, const std::vector<ImuSample>& samples, Utime t_end,
+                              std::vector<ImuTracePoint>* trace) const {
+  if (trace) trace->clear();
+  if (samples.empty() || t_end <= x.utime) {
+    if (trace) {
+      ImuTracePoint tp;
+      tp.utime = x.utime;
+      tp.R_world_imu = x.R_world_imu;
+      tp.p_world_imu = x.p_world_imu;
+      tp.v_world = x.v_world;
+      trace->push_back(tp);
+    }
+    return;
+  }
+  // Cut [x.utime, t_end] at every sample time inside it. Each segment uses the mid-point mean of the
+  // two samples around it; before the first sample and after the last one the nearest sample is held.
+  std::vector<Utime> cuts{x.utime};
+  for (const auto& smp : samples)
+    if (smp.utime > cuts.back() && smp.utime < t_end) cuts.push_back(smp.utime);
+  cuts.push_back(t_end);
+  std::size_t k = 0;
+  for (std::size_t j = 0; j + 1 < cuts.size(); ++j) {
+    const Utime ta = cuts[j], tb = cuts[j + 1];
+    while (k + 1 < samples.size() && samples[k + 1].utime <= ta) ++k;
+    const ImuSample& a = samples[k];
+    const ImuSample& b = (k + 1 < samples.size() && a.utime <= ta) ? samples[k + 1] : a;
+    ImuTracePoint tp;
+    step(x, P, 0.5 * (a.gyro + b.gyro), 0.5 * (a.accel + b.accel), toSeconds(tb - ta), trace ? &tp : nullptr);
+    if (trace) trace->push_back(tp);
+    x.utime = tb;
+  }
+  if (trace) {
+    ImuTracePoint end;
+    end.utime = x.utime;
+    end.R_world_imu = x.R_world_imu;
+    end.p_world_imu = x.p_world_imu;
+    end.v_world = x.v_world;
+    if (!trace->empty()) {
+      end.acc_world = trace->back().acc_world;
+      end.omega = trace->back().omega;
+    }
+    trace->push_back(end);
+  }
+}
+
+Pose ImuPropagator::poseAt(const std::vector<ImuTracePoint>& trace, Utime t) {
+  Pose T = Pose::Identity();
+  if (trace.empty()) return T;
+  // Last trace point with utime <= t (or the first one when t precedes the trace).
+  auto it = std::upper_bound(trace.begin(), trace.end(), t,
+                             [](Utime v, const ImuTracePoint& tp) { return v < tp.utime; });
+  const ImuTracePoint& k = (it == trace.begin()) ? trace.front() : *(it - 1);
+  const double dt = toSeconds(t - k.utime);
+  T.linear() = k.R_world_imu * expSO3(k.omega * dt);
+  T.translation() = k.p_world_imu + k.v_world * dt + 0.5 * k.acc_world * dt * dt;
+  return T;
+}
+
+}  // namespace livo

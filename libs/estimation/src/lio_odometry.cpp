@@ -1,0 +1,122 @@
+#include "livo/estimation/lio_odometry.hpp"
+
+#include "livo/common/timing.hpp"
+#include "livo/estimation/undistort.hpp"
+#include "livo/map/point_cov.hpp"
+#include "livo/sensors/downsample.hpp"
+
+namespace livo {
+
+void LioOdometryConfig::load(const ConfigNode& root) {
+  imu.load(root.section("imu"));
+  lio.load(root);
+  map.load(root.section("voxel_map"));
+  root.section("lidar").require("T_imu_lidar", T_imu_lidar);
+  root.section("lio").get("min_matches", min_matches);
+}
+
+LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(cfg_.map) {}
+
+std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
+                                                  const std::vector<ImuTracePoint>& trace) const {
+  // Undistort every point to the frame time, then downsample in the IMU frame (FAST-LIVO2 order).
+  std::vector<LidarPoint> undistorted = undistortToEnd(sweep, trace, cfg_.T_imu_lidar);
+  if (cfg_.lio.downsample_m > 0) undistorted = voxelDownsample(undistorted, static_cast<float>(cfg_.lio.downsample_m));
+  // Uniform subsampling beyond the point cap keeps the cost per frame bounded.
+  const std::size_t n = undistorted.size();
+  const std::size_t cap = static_cast<std::size_t>(cfg_.lio.max_points);
+  const double stride = n > cap ? double(n) / double(cap) : 1.0;
+  std::vector<BodyPoint> pts;
+  pts.reserve(std::min(n, cap));
+  const Mat3 R_il = cfg_.T_imu_lidar.linear();
+  const Pose T_lidar_imu = cfg_.T_imu_lidar.inverse();
+  for (double f = 0; f < double(n); f += stride) {
+    const LidarPoint& lp = undistorted[static_cast<std::size_t>(f)];
+    BodyPoint bp;
+    bp.p_imu = lp.p_lidar.cast<double>();
+    // Range/bearing covariance in the LiDAR frame, rotated into the IMU frame.
+    const Mat3 cov_l = pointCovarianceBody(T_lidar_imu * bp.p_imu, cfg_.lio.range_noise_m, cfg_.lio.beam_noise_deg);
+    bp.cov_imu = R_il * cov_l * R_il.transpose();
+    pts.push_back(bp);
+  }
+  return pts;
+}
+
+void LioOdometry::insertIntoMap(const std::vector<BodyPoint>& pts) {
+  std::vector<PointWithCov> world;
+  world.reserve(pts.size());
+  for (const auto& bp : pts) {
+    PointWithCov pw;
+    pw.p_world = x_.R_world_imu * bp.p_imu + x_.p_world_imu;
+    pw.cov_world = worldPointCovariance(x_, P_, bp);
+    world.push_back(pw);
+  }
+  map_.insert(world);
+}
+
+LioFrameResult LioOdometry::process(const Frame& frame) {
+  LioFrameResult r;
+  r.utime = frame.utime;
+  r.n_raw_points = static_cast<int>(frame.sweep.points.size());
+  Stopwatch watch;
+
+  // 1. Static initialisation from the first IMU samples (gravity, gyro bias, g units).
+  if (!init_.done()) {
+    for (const auto& s : frame.imu) {
+      if (s.utime <= last_imu_fed_) continue;
+      last_imu_fed_ = s.utime;
+      if (init_.add(s)) break;
+    }
+    if (!init_.done()) return r;
+    x_ = init_.initialState();
+    P_ = initialCovariance();
+    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+    init_message_ = init_.describe();
+  }
+  r.initialized = true;
+  if (frame.utime <= x_.utime) {  // a frame inside the initialisation window: nothing to estimate yet
+    r.state = x_;
+    r.P = P_;
+    return r;
+  }
+
+  // 2. Forward propagation to the frame time, keeping the per-sample trace.
+  std::vector<ImuTracePoint> trace;
+  propagator_->propagate(x_, P_, frame.imu, frame.utime, &trace);
+
+  // 3. Undistort + downsample the sweep, with per-point covariances.
+  r.points = preparePoints(frame.sweep, trace);
+  r.n_points = static_cast<int>(r.points.size());
+
+  // 4. Iterated point-to-plane update against the map (skipped until the map has content).
+  if (map_started_ && !r.points.empty()) {
+    NavState x = x_;
+    StateCov P = P_;
+    const LioUpdateResult u = lidarUpdate(x, P, r.points, map_, cfg_.lio);
+    r.n_matched = u.matched;
+    r.iterations = u.iterations;
+    r.rms_residual_m = u.rms_residual_m;
+    r.sigma_min = degeneracySigmaMin(u.matched_normals);
+    if (u.matched >= cfg_.min_matches) {
+      x_ = x;
+      P_ = P;
+      r.lio_ok = true;
+    }
+  }
+  r.lio_ms = watch.elapsedMs();
+
+  // 5. Map insertion with the posterior pose.
+  Stopwatch map_watch;
+  // As in the reference, the map grows every frame (a failed update keeps the IMU prediction).
+  if (!r.points.empty()) {
+    insertIntoMap(r.points);
+    r.map_started = !map_started_;
+    map_started_ = true;
+  }
+  r.map_ms = map_watch.elapsedMs();
+  r.state = x_;
+  r.P = P_;
+  return r;
+}
+
+}  // namespace livo

@@ -1,0 +1,234 @@
+// livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off] [--map-mode hybrid|global]
+//
+// Runs the whole pipeline in one process (no network) on an LCM log, as fast as possible:
+// log events -> validated structs -> frame builder (recut sweeps + IMU + image) -> odometry -> outputs.
+// Writes DIR/trajectory.tum, DIR/frames.csv, DIR/stats.json; a progress line on stderr and a summary
+// on stdout. A truncated or corrupt log stops the run with an error after writing what was processed.
+#include "livo/common/config.hpp"
+#include "livo/common/timing.hpp"
+#include "livo/estimation/lio_odometry.hpp"
+#include "livo/io/channels.hpp"
+#include "livo/io/convert.hpp"
+#include "livo/io/image_convert.hpp"
+#include "livo/io/log.hpp"
+#include "livo/io/run_outputs.hpp"
+#include "livo/sensors/recombiner.hpp"
+
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <map>
+#include <string>
+
+using namespace livo;
+
+namespace {
+
+struct Args {
+  std::string log, config, out;
+  std::string visual_mode = "adaptive";
+  std::string map_mode = "hybrid";
+  bool quiet = false;
+  long max_frames = -1;
+};
+
+void usage(std::ostream& os) {
+  os << "usage: livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off]\n"
+        "                [--map-mode hybrid|global] [--max-frames N] [--quiet]\n"
+        "Runs the odometry on an LCM log in one process and writes trajectory.tum, frames.csv and\n"
+        "stats.json into DIR.\n";
+}
+
+bool parseArgs(int argc, char** argv, Args& a) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&](std::string& dst) {
+      if (i + 1 >= argc) throw std::runtime_error(s + " needs a value");
+      dst = argv[++i];
+    };
+    if (s == "--help" || s == "-h") {
+      usage(std::cout);
+      std::exit(0);
+    } else if (s == "--config") value(a.config);
+    else if (s == "--out") value(a.out);
+    else if (s == "--visual-mode") value(a.visual_mode);
+    else if (s == "--map-mode") value(a.map_mode);
+    else if (s == "--quiet") a.quiet = true;
+    else if (s == "--max-frames") {
+      std::string v;
+      value(v);
+      a.max_frames = std::stol(v);
+    } else if (!s.empty() && s[0] == '-') throw std::runtime_error("unknown option " + s);
+    else if (a.log.empty()) a.log = s;
+    else throw std::runtime_error("unexpected argument " + s);
+  }
+  if (a.log.empty() || a.config.empty() || a.out.empty()) throw std::runtime_error("LOG, --config and --out are required");
+  if (a.visual_mode != "adaptive" && a.visual_mode != "all" && a.visual_mode != "off")
+    throw std::runtime_error("--visual-mode must be adaptive, all or off (got '" + a.visual_mode + "')");
+  if (a.map_mode != "hybrid" && a.map_mode != "global")
+    throw std::runtime_error("--map-mode must be hybrid or global (got '" + a.map_mode + "')");
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args args;
+  try {
+    parseArgs(argc, argv, args);
+  } catch (const std::exception& e) {
+    std::cerr << "livo-run: " << e.what() << "\n";
+    usage(std::cerr);
+    return 2;
+  }
+
+  // 1. Configuration: every module reads its sections; unknown keys are errors.
+  PreprocessConfig pre_cfg;
+  LioOdometryConfig lio_cfg;
+  ChannelConfig channels;
+  MessageLimits limits;
+  try {
+    ConfigFile file = ConfigFile::load(args.config);
+    const ConfigNode root = file.root();
+    pre_cfg.load(root);
+    lio_cfg.load(root);
+    channels.load(root.section("channels"));
+    // Sections read by modules that are not part of this run yet are accepted but reported.
+    for (const char* later : {"environment", "camera", "selector", "vio", "map"}) {
+      if (root.has(later)) (void)root.section(later);
+    }
+    std::string env;
+    root.get("environment", env);
+    file.checkAllKeysUsed();
+  } catch (const std::exception& e) {
+    std::cerr << "livo-run: " << e.what() << "\n";
+    return 2;
+  }
+  if (args.visual_mode != "off" && !args.quiet)
+    std::cerr << "livo-run: note: the visual update is not part of this build yet; running LiDAR-inertial only\n";
+
+  try {
+    LogReader reader(args.log);
+    RunOutputs outputs(args.out);
+    Recombiner builder(pre_cfg);
+    LioOdometry odometry(lio_cfg);
+    std::map<std::string, double> counters;
+    Stopwatch wall;
+    double last_progress = -1.0;
+    bool announced_init = false;
+    std::string log_error;
+
+    auto runFrames = [&]() {
+      Frame frame;
+      while (builder.nextFrame(frame)) {
+        if (args.max_frames >= 0 && static_cast<long>(outputs.frames()) >= args.max_frames) return;
+        Stopwatch frame_watch;
+        const LioFrameResult r = odometry.process(frame);
+        FrameRecord rec;
+        rec.utime = frame.utime;
+        rec.has_pose = r.initialized;
+        rec.T_world_imu = r.state.pose();
+        rec.lio_ms = r.lio_ms;
+        rec.map_ms = r.map_ms;
+        rec.total_ms = frame_watch.elapsedMs();
+        rec.sigma_min = r.sigma_min;
+        rec.n_points = r.n_points;
+        rec.n_planes_matched = r.n_matched;
+        outputs.addFrame(rec);
+        if (r.initialized && !announced_init && !args.quiet) {
+          std::cerr << "livo-run: " << odometry.initMessage() << "\n";
+          announced_init = true;
+        }
+        if (r.initialized && r.n_points > 0 && !r.lio_ok && !r.map_started) counters["lio_failed_frames"] += 1;
+      }
+    };
+
+    // 2. Replay: decode and validate each event, feed the frame builder, run every complete frame.
+    LogEvent ev;
+    try {
+      while (reader.next(ev)) {
+        if (ev.channel == channels.imu) {
+          livo::imu_t m;
+          ImuSample s;
+          Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+          if (v) v = fromMsg(m, s);
+          if (!v) { counters["rejected_imu"] += 1; continue; }
+          builder.addImu(s);
+        } else if (ev.channel == channels.lidar) {
+          livo::lidar_scan_t m;
+          LidarScan s;
+          std::size_t nonfinite = 0;
+          Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+          if (v) v = fromMsg(m, s, limits, &nonfinite);
+          if (!v) {
+            counters["rejected_scans"] += 1;
+            if (!args.quiet) std::cerr << "livo-run: dropped a scan: " << v.error << "\n";
+            continue;
+          }
+          counters["nonfinite_points"] += double(nonfinite);
+          builder.addScan(s);
+        } else if (ev.channel == channels.camera) {
+          if (!pre_cfg.camera_enabled) continue;
+          livo::image_t m;
+          Image img, gray;
+          std::string err;
+          Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+          if (v) v = fromMsg(m, img, limits);
+          if (v && !toGray8(img, gray, &err)) v = Validation::fail(err);
+          if (!v) {
+            counters["rejected_images"] += 1;
+            if (!args.quiet) std::cerr << "livo-run: dropped an image: " << v.error << "\n";
+            continue;
+          }
+          builder.addImage(gray);
+        } else {
+          continue;
+        }
+        runFrames();
+        if (args.max_frames >= 0 && static_cast<long>(outputs.frames()) >= args.max_frames) break;
+        const double secs = wall.elapsedMs() / 1000.0;
+        if (!args.quiet && secs - last_progress > 0.5) {
+          last_progress = secs;
+          std::fprintf(stderr, "\rlivo-run: %5.1f%% of log, %zu frames, %.1f frames/s   ",
+                       100.0 * double(reader.position()) / double(std::max<std::uint64_t>(1, reader.fileSize())),
+                       outputs.frames(), double(outputs.frames()) / std::max(1e-3, secs));
+        }
+      }
+      builder.flush();
+      runFrames();
+    } catch (const LogError& e) {
+      log_error = e.what();  // keep everything processed so far; report below
+    }
+    if (!args.quiet) std::fprintf(stderr, "\n");
+
+    // 3. Outputs: stats.json + a summary on stdout.
+    const PreprocessStats& pst = builder.stats();
+    for (const auto& [k, v] : std::map<std::string, std::uint64_t>{
+             {"frames", pst.frames}, {"empty_sweeps", pst.empty_sweeps}, {"images_used", pst.images_used},
+             {"images_dropped", pst.imagesDropped()}, {"imu_out_of_order", pst.imu_out_of_order},
+             {"imu_duplicates", pst.imu_duplicates}, {"imu_gaps", pst.imu_gaps},
+             {"scans_out_of_order", pst.scans_out_of_order}, {"points_in", pst.points_in},
+             {"points_nan", pst.points_nan}, {"points_emitted", pst.points_emitted},
+             {"buffer_overflow_drops", pst.bufferOverflowDrops()}})
+      counters["preprocess_" + k] = double(v);
+    MapSummary ms;
+    ms.local_voxels = odometry.map().numRootVoxels();
+    ms.bytes = odometry.map().bytes();
+    const double rss = bytesToMb(peakRssBytes());
+    std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
+                                             {"log", args.log}, {"config", args.config}};
+    if (!log_error.empty()) notes["log_error"] = log_error;
+    outputs.writeStats(ms, rss, counters, notes);
+    std::cout << outputs.summary(rss);
+    if (!args.quiet) std::cout << "preprocessing:\n" << pst.summary() << "\n";
+    std::cout << "outputs in " << args.out << "\n";
+    if (!log_error.empty()) {
+      std::cerr << "livo-run: error: " << log_error << " (outputs up to this point were written)\n";
+      return 1;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "livo-run: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
