@@ -48,14 +48,10 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
   const double conv_rot = cfg.converge_rot_deg * M_PI / 180.0;
 
-  // World covariances for association are evaluated once at the prior (the state uncertainty part
-  // is what widens the gates; the pose part moves little between iterations).
-  std::vector<Mat3> cov_world(points.size());
+  // The point's own noise in the world frame (residual weights), evaluated at the prior.
   std::vector<Mat3> cov_meas_world(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    cov_world[i] = worldPointCovariance(x_prop, P_prop, points[i]);
+  for (std::size_t i = 0; i < points.size(); ++i)
     cov_meas_world[i] = x_prop.R_world_imu * points[i].cov_imu * x_prop.R_world_imu.transpose();
-  }
 
   StateCov K_bar = StateCov::Zero();
   Mat66 HtRH = Mat66::Zero();
@@ -66,10 +62,13 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
     Vec66 HtRz = Vec66::Zero();
     res.matched_normals.clear();
     double sq = 0;
+    // Association gates widen with the pose uncertainty: the prior's in the first iteration, then the
+    // current posterior's (K_bar), so that gates shrink as the estimate settles.
+    const StateCov& P_gate = it == 0 ? P_prop : K_bar;
     for (std::size_t i = 0; i < points.size(); ++i) {
       PointWithCov pw;
       pw.p_world = x.R_world_imu * points[i].p_imu + x.p_world_imu;
-      pw.cov_world = cov_world[i];
+      pw.cov_world = worldPointCovariance(x, P_gate, points[i]);
       VoxelMap::PlaneMatch m;
       if (!map.findBestPlane(pw, m)) continue;
       const Plane& pl = *m.plane;
