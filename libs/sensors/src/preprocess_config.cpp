@@ -35,6 +35,8 @@ std::pair<std::string, std::string> firstProblem(const PreprocessConfig& c) {
   if (!finite(c.max_buffer_s) || c.max_buffer_s <= c.wait_timeout_s || c.max_buffer_s <= c.image_wait_timeout_s ||
       c.max_buffer_s > 3600.0)
     return {"preprocess.max_buffer_s", "must exceed wait_timeout_s and image_wait_timeout_s, and be <= 3600 s"};
+  if (!finite(c.max_time_jump_s) || c.max_time_jump_s <= 0.0 || c.max_time_jump_s > 3600.0)
+    return {"preprocess.max_time_jump_s", "must be in (0, 3600] s"};
   if (!finite(c.max_point_offset_s) || c.max_point_offset_s <= 0.0 || c.max_point_offset_s > 60.0)
     return {"preprocess.max_point_offset_s", "must be in (0, 60] s"};
   if (!finite(c.voxel_leaf_m) || c.voxel_leaf_m < 0.0 || c.voxel_leaf_m > 100.0)
@@ -69,6 +71,7 @@ void PreprocessConfig::load(const ConfigNode& root) {
   pre.get("wait_timeout_s", wait_timeout_s);
   pre.get("image_wait_timeout_s", image_wait_timeout_s);
   pre.get("max_buffer_s", max_buffer_s);
+  pre.get("max_time_jump_s", max_time_jump_s);
   pre.get("max_point_offset_s", max_point_offset_s);
   pre.get("voxel_leaf_m", voxel_leaf_m);
 

@@ -33,6 +33,59 @@ bool Recombiner::timedOut(Utime t, double timeout_s) const {
   return flushing_ || (have_any_ && max_seen_ - t > fromSeconds(timeout_s));
 }
 
+// ---------------------------------------------------------------- forward jumps
+
+Recombiner::JumpGuard::Decision Recombiner::JumpGuard::check(bool have_prev, Utime prev, Utime t, Utime max_jump) {
+  Decision d;
+  if (holding) {
+    holding = false;
+    if (t > held_t && t - held_t <= max_jump) {  // the stream goes on from the held stamp: confirmed
+      d.release_held = true;
+      d.released_jump = held_is_jump;
+      return d;
+    }
+    d.discard_held = true;
+  }
+  if (!have_prev || t - prev > max_jump) {
+    holding = true;
+    held_is_jump = have_prev;
+    held_t = t;
+    d.hold_new = true;
+  }
+  return d;
+}
+
+void Recombiner::flush() {
+  // Held items: the first item of a stream cannot be contradicted any more and is used; an
+  // unconfirmed jump is dropped as a glitch.
+  if (imu_guard_.holding) {
+    if (imu_guard_.held_is_jump)
+      ++stats_.imu_glitches;
+    else
+      acceptImu(held_imu_);
+  }
+  if (scan_guard_.holding) {
+    if (scan_guard_.held_is_jump) {
+      ++stats_.scans_glitches;
+      stats_.points_in += held_scan_.points.size();
+      stats_.points_out_of_order += held_scan_.points.size();
+    } else {
+      acceptScan(held_scan_, held_scan_start_);
+    }
+    held_scan_ = LidarScan{};
+  }
+  if (image_guard_.holding) {
+    if (image_guard_.held_is_jump)
+      ++stats_.images_glitches;
+    else if (acceptImageStamp(held_image_.utime))
+      images_.push_back(std::move(held_image_));
+    held_image_ = Image{};
+  }
+  imu_guard_.holding = scan_guard_.holding = image_guard_.holding = false;
+  flushing_ = true;
+  trimBuffers();
+}
+
 // ---------------------------------------------------------------- IMU
 
 void Recombiner::addImu(const ImuSample& sample) {
@@ -41,7 +94,22 @@ void Recombiner::addImu(const ImuSample& sample) {
     ++stats_.imu_invalid;
     return;
   }
-  const Utime t = sample.utime - fromSeconds(cfg_.imu_time_offset_s);
+  ImuSample m = sample;
+  m.utime = sample.utime - fromSeconds(cfg_.imu_time_offset_s);
+  const auto d = imu_guard_.check(have_imu_, imu_newest_, m.utime, fromSeconds(cfg_.max_time_jump_s));
+  if (d.discard_held) ++stats_.imu_glitches;
+  if (d.release_held) {
+    if (d.released_jump) ++stats_.forward_jumps;
+    acceptImu(held_imu_);
+  }
+  if (d.hold_new)
+    held_imu_ = m;
+  else
+    acceptImu(m);
+}
+
+void Recombiner::acceptImu(const ImuSample& m) {
+  const Utime t = m.utime;
   if (have_imu_) {
     if (t == imu_newest_) {
       ++stats_.imu_duplicates;
@@ -55,8 +123,7 @@ void Recombiner::addImu(const ImuSample& sample) {
     stats_.imu_max_gap_s = std::max(stats_.imu_max_gap_s, step_s);
     if (step_s > cfg_.imuGapThresholdS()) ++stats_.imu_gaps;
   }
-  imu_.push_back(sample);
-  imu_.back().utime = t;
+  imu_.push_back(m);
   imu_newest_ = t;
   have_imu_ = true;
   noteTime(t);
@@ -68,6 +135,26 @@ void Recombiner::addImu(const ImuSample& sample) {
 void Recombiner::addScan(const LidarScan& scan) {
   ++stats_.scans_in;
   const Utime start = scan.utime + fromSeconds(cfg_.lidar_time_offset_s);
+  const auto d = scan_guard_.check(have_scan_, last_scan_start_, start, fromSeconds(cfg_.max_time_jump_s));
+  if (d.discard_held) {
+    ++stats_.scans_glitches;
+    stats_.points_in += held_scan_.points.size();
+    stats_.points_out_of_order += held_scan_.points.size();
+  }
+  if (d.release_held) {
+    if (d.released_jump) ++stats_.forward_jumps;
+    acceptScan(held_scan_, held_scan_start_);
+  }
+  if (d.release_held || d.discard_held) held_scan_ = LidarScan{};
+  if (d.hold_new) {
+    held_scan_ = scan;
+    held_scan_start_ = start;
+  } else {
+    acceptScan(scan, start);
+  }
+}
+
+void Recombiner::acceptScan(const LidarScan& scan, Utime start) {
   if (have_scan_ && start <= last_scan_start_) {  // backward jump or repeated scan: drop it whole
     ++stats_.scans_out_of_order;
     stats_.points_in += scan.points.size();
@@ -118,7 +205,7 @@ void Recombiner::addScan(const LidarScan& scan) {
 
 // ---------------------------------------------------------------- images
 
-bool Recombiner::acceptImage(const Image& image, Utime& t) {
+bool Recombiner::screenImage(const Image& image, Utime& t) {
   ++stats_.images_in;
   if (!cfg_.camera_enabled) {
     ++stats_.images_ignored;
@@ -129,6 +216,10 @@ bool Recombiner::acceptImage(const Image& image, Utime& t) {
     return false;
   }
   t = image.utime + fromSeconds(cfg_.camera_time_offset_s);
+  return true;
+}
+
+bool Recombiner::acceptImageStamp(Utime t) {
   if (have_frame_ && t <= sweep_start_) {  // sweep_start_ is the last frame time here
     ++stats_.images_stale;
     return false;
@@ -153,21 +244,29 @@ bool Recombiner::acceptImage(const Image& image, Utime& t) {
   return true;
 }
 
-void Recombiner::addImage(const Image& image) {
+template <class ImageRef>
+void Recombiner::addImageImpl(ImageRef&& image) {
   Utime t = 0;
-  if (!acceptImage(image, t)) return trimBuffers();
-  images_.push_back(image);
-  images_.back().utime = t;
+  if (!screenImage(image, t)) return;
+  const auto d = image_guard_.check(have_image_seen_, last_image_seen_, t, fromSeconds(cfg_.max_time_jump_s));
+  if (d.discard_held) ++stats_.images_glitches;
+  if (d.release_held) {
+    if (d.released_jump) ++stats_.forward_jumps;
+    if (acceptImageStamp(held_image_.utime)) images_.push_back(std::move(held_image_));
+  }
+  if (d.release_held || d.discard_held) held_image_ = Image{};
+  if (d.hold_new) {
+    held_image_ = std::forward<ImageRef>(image);
+    held_image_.utime = t;
+  } else if (acceptImageStamp(t)) {
+    images_.push_back(std::forward<ImageRef>(image));
+    images_.back().utime = t;
+  }
   trimBuffers();
 }
 
-void Recombiner::addImage(Image&& image) {
-  Utime t = 0;
-  if (!acceptImage(image, t)) return trimBuffers();
-  images_.push_back(std::move(image));
-  images_.back().utime = t;
-  trimBuffers();
-}
+void Recombiner::addImage(const Image& image) { addImageImpl(image); }
+void Recombiner::addImage(Image&& image) { addImageImpl(std::move(image)); }
 
 // ---------------------------------------------------------------- frames
 
@@ -275,7 +374,8 @@ void Recombiner::trimBuffers() {
   if (!have_any_) return;
   const Utime cut = max_seen_ - fromSeconds(cfg_.max_buffer_s);
 
-  // Before the first frame the sweep start moves up with the buffer window (nothing is lost yet).
+  // Before the first frame there is no previous frame to stay contiguous with: the first sweep
+  // starts at the buffer window instead (the points before it are counted as overflow below).
   if (lidar_started_ && !have_frame_ && sweep_start_ < cut) {
     sweep_start_ = cut;
     floor_ = cut - 1;

@@ -38,6 +38,10 @@ struct PreprocessConfig {
   double image_wait_timeout_s = 0.5;
   /// Buffered points and IMU samples older than (newest stamp - this) are dropped and counted.
   double max_buffer_s = 5.0;
+  /// A stamp more than this after the previous one of its stream is held until the next message of
+  /// that stream confirms it (a real gap) or not (a glitch: dropped and counted). Must exceed the
+  /// period of every stream; a real gap delays that stream by one message.
+  double max_time_jump_s = 1.0;
   double max_point_offset_s = 1.0;  ///< points with |time_offset_s| above this are dropped (bad time)
   /// > 0: each emitted sweep is voxel-downsampled with this leaf (downsample.hpp), m. 0: full sweep.
   double voxel_leaf_m = 0.0;
@@ -45,7 +49,7 @@ struct PreprocessConfig {
   /// Reads the keys above from the root of a rig config: lidar.{time_offset_s, blind_m, max_range_m,
   /// point_filter_num}, imu.{time_offset_s, rate_hz}, camera.{enabled, time_offset_s} and
   /// preprocess.{min_frame_interval_s, image_decimation, max_imu_gap_s, wait_timeout_s,
-  /// image_wait_timeout_s, max_buffer_s, max_point_offset_s, voxel_leaf_m}. Validates them; throws
+  /// image_wait_timeout_s, max_buffer_s, max_time_jump_s, max_point_offset_s, voxel_leaf_m}. Validates them; throws
   /// ConfigError naming the key on a bad value.
   void load(const ConfigNode& root);
   /// Checks the values (also after setting fields in code); throws std::invalid_argument.

@@ -33,9 +33,10 @@ struct PreprocessStats {
   Count images_too_close = 0;     ///< closer than min_frame_interval_s to the previous kept image
   Count images_no_lidar = 0;      ///< before the first LiDAR point, or no LiDAR at all within the timeout
   Count images_overflow = 0;      ///< still waiting after max_buffer_s (nextFrame not called)
+  Count images_glitches = 0;      ///< unconfirmed forward stamp jump (max_time_jump_s)
   Count imagesDropped() const {
     return images_ignored + images_invalid + images_stale + images_out_of_order + images_decimated +
-           images_too_close + images_no_lidar + images_overflow;
+           images_too_close + images_no_lidar + images_overflow + images_glitches;
   }
 
   // ---- IMU ----
@@ -46,18 +47,21 @@ struct PreprocessStats {
   Count imu_gaps = 0;          ///< steps longer than PreprocessConfig::imuGapThresholdS()
   double imu_max_gap_s = 0.0;  ///< largest step between consecutive accepted samples
   Count imu_overflow = 0;      ///< dropped by max_buffer_s while still needed
+  Count imu_glitches = 0;      ///< unconfirmed forward stamp jump (max_time_jump_s)
 
   // ---- scans and points ----
   Count scans_in = 0;
   Count scans_out_of_order = 0;  ///< start stamp at or before the previous scan's (whole scan dropped)
   Count scans_empty = 0;         ///< no point left after filtering
+  Count scans_glitches = 0;      ///< unconfirmed forward stamp jump (whole scan dropped)
+  Count forward_jumps = 0;       ///< confirmed forward stamp jumps, all streams (data kept)
   Count points_in = 0;
   Count points_nan = 0;             ///< non-finite coordinates or time offset
   Count points_bad_time = 0;        ///< |time_offset_s| > max_point_offset_s
   Count points_blind = 0;           ///< closer than blind_m
   Count points_range = 0;           ///< farther than max_range_m
   Count points_decimated = 0;       ///< point_filter_num
-  Count points_out_of_order = 0;    ///< in scans dropped as out of order
+  Count points_out_of_order = 0;    ///< in scans dropped as out of order or as glitches
   Count points_late = 0;            ///< time at or before a frame already emitted
   Count points_overflow = 0;        ///< dropped by max_buffer_s
   Count points_voxel_merged = 0;    ///< removed by the sweep voxel filter (voxel_leaf_m)
