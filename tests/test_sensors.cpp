@@ -982,4 +982,27 @@ TEST(NewerCollege, DownsampleTiming) {
     EXPECT_LT(out_size, scans[0].points.size());
     EXPECT_GT(out_size, 100u);
   }
+  // Recombiner cost per scan (filter, sort check, merge, cut), LiDAR-only frames, 30 scans.
+  PreprocessConfig c = testConfig(false);
+  Recombiner r(c);
+  Frame f;
+  double ms = 0.0;
+  std::size_t points = 0, frames = 0;
+  for (int k = 0; k < 30; ++k) {
+    LidarScan s = scans[k % 3];
+    s.utime = kT0 + k * 100000;
+    ImuSample m;
+    m.utime = s.utime + 120000;
+    Stopwatch w;
+    r.addScan(s);
+    r.addImu(m);
+    while (r.nextFrame(f)) {
+      points += f.sweep.points.size();
+      ++frames;
+    }
+    ms += w.elapsedMs();
+  }
+  std::cout << "[ Recombiner ] " << frames << " frames, " << points / std::max<std::size_t>(frames, 1)
+            << " points per frame, " << ms / 30 << " ms per scan (add + cut)\n";
+  EXPECT_GE(frames, 28u);
 }
