@@ -12,6 +12,8 @@
 #include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
+#include "livo/estimation/selector_config.hpp"
+#include "livo/sensors/camera_config.hpp"
 #include "livo/sensors/recombiner.hpp"
 
 #include <cstdio>
@@ -86,6 +88,8 @@ int main(int argc, char** argv) {
   PreprocessConfig pre_cfg;
   LioOdometryConfig lio_cfg;
   ChannelConfig channels;
+  CameraConfig camera_cfg;
+  SelectorConfig selector_cfg;
   MessageLimits limits;
   try {
     ConfigFile file = ConfigFile::load(args.config);
@@ -93,12 +97,8 @@ int main(int argc, char** argv) {
     pre_cfg.load(root);
     lio_cfg.load(root);
     channels.load(root.section("channels"));
-    // Sections read by modules that are not part of this run yet are accepted but reported.
-    for (const char* later : {"environment", "camera", "selector", "vio", "map"}) {
-      if (root.has(later)) (void)root.section(later);
-    }
-    std::string env;
-    root.get("environment", env);
+    camera_cfg.load(root);
+    selector_cfg.load(root);
     file.checkAllKeysUsed();
   } catch (const std::exception& e) {
     std::cerr << "livo-run: " << e.what() << "\n";

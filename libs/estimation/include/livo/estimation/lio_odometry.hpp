@@ -17,6 +17,7 @@ struct LioOdometryConfig {
   LioConfig lio;
   VoxelMapConfig map;
   Pose T_imu_lidar = Pose::Identity();
+  std::string lidar_model = "generic";  ///< lidar.model: avia | mid360 | spinning32 | generic
   int min_matches = 20;  ///< fewer matched points: the update is skipped and the frame flagged
 
   /// Reads the rig sections imu, lidar (T_imu_lidar required) and the lio / voxel_map sections.

@@ -1,0 +1,20 @@
+#include "livo/estimation/selector_config.hpp"
+
+namespace livo {
+
+void SelectorConfig::load(const ConfigNode& root) {
+  root.get("environment", environment);
+  root.check(environment == "indoor" || environment == "outdoor", "environment",
+             "must be indoor or outdoor, got '" + environment + "'");
+  tau_translation_m = environment == "outdoor" ? 2.0 : 1.0;
+  const ConfigNode n = root.section("selector");
+  n.get("degeneracy_threshold", degeneracy_threshold).get("degenerate_frames", degenerate_frames);
+  n.get("tau_translation_m", tau_translation_m).get("tau_rotation_deg", tau_rotation_deg);
+  n.check(degeneracy_threshold >= 0 && degeneracy_threshold < 0.58, "degeneracy_threshold",
+          "must be in [0, 1/sqrt(3))");
+  n.check(degenerate_frames >= 1, "degenerate_frames", "must be >= 1");
+  n.check(tau_translation_m > 0, "tau_translation_m", "must be > 0");
+  n.check(tau_rotation_deg > 0, "tau_rotation_deg", "must be > 0");
+}
+
+}  // namespace livo

@@ -1,0 +1,27 @@
+// Camera calibration from the rig config's `camera` section (config/README.md).
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/common/so3.hpp"
+
+#include <string>
+#include <vector>
+
+namespace livo {
+
+struct CameraConfig {
+  bool enabled = false;          ///< absent section: no camera
+  std::string model = "pinhole"; ///< pinhole (radtan k1 k2 p1 p2) | equidistant (Kannala-Brandt k1..k4)
+  int width = 0, height = 0;     ///< pixels (required when enabled)
+  double fx = 0, fy = 0, cx = 0, cy = 0;  ///< pixels (required when enabled)
+  std::vector<double> distortion;  ///< 4 coefficients (or empty = none)
+  double scale = 1.0;            ///< image and intrinsics scale used by the visual update (0 < scale <= 1)
+  Pose T_imu_camera = Pose::Identity();  ///< camera pose in the IMU frame (required when enabled)
+  double pixel_noise = 3.0;      ///< photometric noise sigma, gray levels
+
+  /// Reads the `camera` section of a rig config; keys owned by the preprocessing (time_offset_s) are
+  /// read there. Throws ConfigError naming the key when a required one is missing or invalid.
+  void load(const ConfigNode& root);
+};
+
+}  // namespace livo

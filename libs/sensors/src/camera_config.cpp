@@ -1,0 +1,33 @@
+#include "livo/sensors/camera_config.hpp"
+
+namespace livo {
+
+void CameraConfig::load(const ConfigNode& root) {
+  if (!root.has("camera")) {
+    enabled = false;
+    return;
+  }
+  const ConfigNode n = root.section("camera");
+  enabled = true;
+  n.get("enabled", enabled);
+  n.get("model", model).get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
+  if (!enabled) {
+    // A disabled camera may still carry its calibration: read it without requiring it.
+    n.get("width", width).get("height", height).get("fx", fx).get("fy", fy).get("cx", cx).get("cy", cy);
+    n.get("T_imu_camera", T_imu_camera);
+    return;
+  }
+  n.require("width", width).require("height", height);
+  n.require("fx", fx).require("fy", fy).require("cx", cx).require("cy", cy);
+  n.require("T_imu_camera", T_imu_camera);
+  n.check(model == "pinhole" || model == "equidistant", "model", "must be pinhole or equidistant, got '" + model + "'");
+  n.check(width > 0 && width <= 16384, "width", "must be in 1..16384");
+  n.check(height > 0 && height <= 16384, "height", "must be in 1..16384");
+  n.check(fx > 0, "fx", "must be > 0");
+  n.check(fy > 0, "fy", "must be > 0");
+  n.check(distortion.empty() || distortion.size() == 4, "distortion", "needs 4 coefficients (or none)");
+  n.check(scale > 0 && scale <= 1.0, "scale", "must be in (0, 1]");
+  n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
+}
+
+}  // namespace livo
