@@ -6,15 +6,12 @@
 // on stdout. A truncated or corrupt log stops the run with an error after writing what was processed.
 #include "livo/common/config.hpp"
 #include "livo/common/timing.hpp"
-#include "livo/estimation/lio_odometry.hpp"
+#include "livo/estimation/pipeline.hpp"
 #include "livo/io/channels.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
-#include "livo/estimation/selector_config.hpp"
-#include "livo/sensors/camera_config.hpp"
-#include "livo/sensors/recombiner.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -85,21 +82,17 @@ int main(int argc, char** argv) {
   }
 
   // 1. Configuration: every module reads its sections; unknown keys are errors.
-  PreprocessConfig pre_cfg;
-  LioOdometryConfig lio_cfg;
+  PipelineConfig pipe_cfg;
   ChannelConfig channels;
-  CameraConfig camera_cfg;
-  SelectorConfig selector_cfg;
   MessageLimits limits;
   try {
     ConfigFile file = ConfigFile::load(args.config);
     const ConfigNode root = file.root();
-    pre_cfg.load(root);
-    lio_cfg.load(root);
+    pipe_cfg.load(root);
     channels.load(root.section("channels"));
-    camera_cfg.load(root);
-    selector_cfg.load(root);
     file.checkAllKeysUsed();
+    pipe_cfg.visual_mode = args.visual_mode;
+    pipe_cfg.map_mode = args.map_mode;
   } catch (const std::exception& e) {
     std::cerr << "livo-run: " << e.what() << "\n";
     return 2;
@@ -110,38 +103,39 @@ int main(int argc, char** argv) {
   try {
     LogReader reader(args.log);
     RunOutputs outputs(args.out);
-    Recombiner builder(pre_cfg);
-    LioOdometry odometry(lio_cfg);
+    Pipeline pipeline(pipe_cfg);
     std::map<std::string, double> counters;
     Stopwatch wall;
     double last_progress = -1.0;
     bool announced_init = false;
     std::string log_error;
 
-    auto runFrames = [&]() {
-      Frame frame;
-      while (builder.nextFrame(frame)) {
-        if (args.max_frames >= 0 && static_cast<long>(outputs.frames()) >= args.max_frames) return;
-        Stopwatch frame_watch;
-        const LioFrameResult r = odometry.process(frame);
-        FrameRecord rec;
-        rec.utime = frame.utime;
-        rec.has_pose = r.initialized;
-        rec.T_world_imu = r.state.pose();
-        rec.lio_ms = r.lio_ms;
-        rec.map_ms = r.map_ms;
-        rec.total_ms = frame_watch.elapsedMs();
-        rec.sigma_min = r.sigma_min;
-        rec.n_points = r.n_points;
-        rec.n_planes_matched = r.n_matched;
-        outputs.addFrame(rec);
-        if (r.initialized && !announced_init && !args.quiet) {
-          std::cerr << "livo-run: " << odometry.initMessage() << "\n";
-          announced_init = true;
-        }
-        if (r.initialized && r.n_points > 0 && !r.lio_ok && !r.map_started) counters["lio_failed_frames"] += 1;
+    bool stop = false;
+    const auto onFrame = [&](const Frame& frame, const FrameResult& r) {
+      if (stop) return;
+      FrameRecord rec;
+      rec.utime = frame.utime;
+      rec.has_pose = r.lio.initialized;
+      rec.T_world_imu = r.lio.state.pose();
+      rec.lio_ms = r.lio.lio_ms;
+      rec.vio_ms = r.vio_ms;
+      rec.map_ms = r.lio.map_ms;
+      rec.total_ms = r.total_ms;
+      rec.sigma_min = r.lio.sigma_min;
+      rec.degenerate = r.degenerate;
+      rec.visual_used = r.visual_used;
+      rec.n_points = r.lio.n_points;
+      rec.n_planes_matched = r.lio.n_matched;
+      rec.n_visual_points = r.n_visual_points;
+      outputs.addFrame(rec);
+      if (r.lio.initialized && !announced_init && !args.quiet) {
+        std::cerr << "livo-run: " << pipeline.odometry().initMessage() << "\n";
+        announced_init = true;
       }
+      if (r.lio.initialized && r.lio.n_points > 0 && !r.lio.lio_ok && !r.lio.map_started) counters["lio_failed_frames"] += 1;
+      if (args.max_frames >= 0 && static_cast<long>(outputs.frames()) >= args.max_frames) stop = true;
     };
+    auto runFrames = [&]() { pipeline.processReady(onFrame); };
 
     // 2. Replay: decode and validate each event, feed the frame builder, run every complete frame.
     LogEvent ev;
@@ -153,7 +147,7 @@ int main(int argc, char** argv) {
           Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
           if (v) v = fromMsg(m, s);
           if (!v) { counters["rejected_imu"] += 1; continue; }
-          builder.addImu(s);
+          pipeline.addImu(s);
         } else if (ev.channel == channels.lidar) {
           livo::lidar_scan_t m;
           LidarScan s;
@@ -166,9 +160,9 @@ int main(int argc, char** argv) {
             continue;
           }
           counters["nonfinite_points"] += double(nonfinite);
-          builder.addScan(s);
+          pipeline.addScan(s);
         } else if (ev.channel == channels.camera) {
-          if (!pre_cfg.camera_enabled) continue;
+          if (!pipe_cfg.preprocess.camera_enabled) continue;
           livo::image_t m;
           Image img, gray;
           std::string err;
@@ -180,12 +174,12 @@ int main(int argc, char** argv) {
             if (!args.quiet) std::cerr << "livo-run: dropped an image: " << v.error << "\n";
             continue;
           }
-          builder.addImage(gray);
+          pipeline.addImage(gray);
         } else {
           continue;
         }
         runFrames();
-        if (args.max_frames >= 0 && static_cast<long>(outputs.frames()) >= args.max_frames) break;
+        if (stop) break;
         const double secs = wall.elapsedMs() / 1000.0;
         if (!args.quiet && secs - last_progress > 0.5) {
           last_progress = secs;
@@ -194,15 +188,17 @@ int main(int argc, char** argv) {
                        outputs.frames(), double(outputs.frames()) / std::max(1e-3, secs));
         }
       }
-      builder.flush();
-      runFrames();
+      if (!stop) {
+        pipeline.flush();
+        runFrames();
+      }
     } catch (const LogError& e) {
       log_error = e.what();  // keep everything processed so far; report below
     }
     if (!args.quiet) std::fprintf(stderr, "\n");
 
     // 3. Outputs: stats.json + a summary on stdout.
-    const PreprocessStats& pst = builder.stats();
+    const PreprocessStats& pst = pipeline.recombiner().stats();
     for (const auto& [k, v] : std::map<std::string, std::uint64_t>{
              {"frames", pst.frames}, {"empty_sweeps", pst.empty_sweeps}, {"images_used", pst.images_used},
              {"images_dropped", pst.imagesDropped()}, {"imu_out_of_order", pst.imu_out_of_order},
@@ -212,8 +208,8 @@ int main(int argc, char** argv) {
              {"buffer_overflow_drops", pst.bufferOverflowDrops()}})
       counters["preprocess_" + k] = double(v);
     MapSummary ms;
-    ms.local_voxels = odometry.map().numRootVoxels();
-    ms.bytes = odometry.map().bytes();
+    ms.local_voxels = pipeline.odometry().map().numRootVoxels();
+    ms.bytes = pipeline.odometry().map().bytes();
     const double rss = bytesToMb(peakRssBytes());
     std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
                                              {"log", args.log}, {"config", args.config}};
