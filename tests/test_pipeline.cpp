@@ -1,12 +1,15 @@
 // End-to-end on the simulator, in one process (the same Pipeline livo-run uses): short seeded runs of
 // the shipped scenarios against the simulator's ground truth, plus undistortion with the true IMU.
 // LiDAR-inertial only here (camera frames are not rendered); the visual update has its own tests.
-// livo-test-deps: livo_sim livo_estimation livo_eval
+// livo-test-deps: livo_sim livo_estimation livo_eval livo_io
 #include "livo/estimation/pipeline.hpp"
 #include "livo/estimation/undistort.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/eval/evaluate.hpp"
+#include "livo/io/channels.hpp"
 #include "livo/sim/simulator.hpp"
+
+#include <filesystem>
 
 #include <gtest/gtest.h>
 
@@ -155,4 +158,23 @@ TEST(Pipeline, UndistortionWithTrueImuPutsPointsOnSurfaces) {
             << " mm; raw median " << sr.median * 1000 << " mm p95 " << sr.p95 * 1000 << " mm\n";
   EXPECT_LT(su.p95, 0.002);
   EXPECT_GT(sr.p95, 10 * su.p95) << "the sweep must actually be distorted for this test to mean anything";
+}
+
+// Every shipped rig config loads with every module that reads it, with no unknown key.
+TEST(Pipeline, ShippedRigConfigsLoadCompletely) {
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(LIVO_SOURCE_DIR) + "/config")) {
+    if (e.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(e.path().string());
+    ConfigFile file = ConfigFile::load(e.path().string());
+    PipelineConfig cfg;
+    ChannelConfig channels;
+    EXPECT_NO_THROW({
+      cfg.load(file.root());
+      channels.load(file.root().section("channels"));
+      file.checkAllKeysUsed();
+    });
+    ++n;
+  }
+  EXPECT_GE(n, 3);
 }
