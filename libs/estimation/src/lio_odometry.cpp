@@ -101,6 +101,8 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
     r.iterations = u.iterations;
     r.rms_residual_m = u.rms_residual_m;
     r.sigma_min = degeneracySigmaMin(u.matched_normals);
+    r.matched_index = u.matched_index;
+    r.matched_normals = u.matched_normals;
     if (u.matched >= cfg_.min_matches) {
       x_ = x;
       P_ = P;

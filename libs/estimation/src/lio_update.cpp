@@ -61,6 +61,7 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
     HtRH.setZero();
     Vec66 HtRz = Vec66::Zero();
     res.matched_normals.clear();
+    res.matched_index.clear();
     double sq = 0;
     // Association gates widen with the pose uncertainty: the prior's in the first iteration, then the
     // current posterior's (K_bar), so that gates shrink as the estimate settles.
@@ -78,6 +79,7 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
       HtRH += r.h * r.h.transpose() / var;
       HtRz += r.h * r.residual / var;
       res.matched_normals.push_back(pl.normal);
+      res.matched_index.push_back(static_cast<int>(i));
       sq += r.residual * r.residual;
     }
     res.matched = static_cast<int>(res.matched_normals.size());

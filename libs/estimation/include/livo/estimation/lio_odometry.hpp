@@ -41,6 +41,8 @@ struct LioFrameResult {
   double lio_ms = 0.0;       ///< propagation + undistortion + update
   double map_ms = 0.0;       ///< map insertion
   std::vector<BodyPoint> points;  ///< the frame's downsampled points (IMU frame at utime)
+  std::vector<int> matched_index;    ///< points that matched a plane (indices into points) ...
+  std::vector<Vec3> matched_normals; ///< ... and that plane's normal
 };
 
 class LioOdometry {

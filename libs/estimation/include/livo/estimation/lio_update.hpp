@@ -42,7 +42,8 @@ struct LioUpdateResult {
   int iterations = 0;
   bool converged = false;
   int matched = 0;                 ///< points with a plane at the final iteration
-  std::vector<Vec3> matched_normals;
+  std::vector<Vec3> matched_normals;  ///< plane normal of each matched point (final iteration)
+  std::vector<int> matched_index;     ///< index into the input points, parallel to matched_normals
   double rms_residual_m = 0.0;
 };
 
