@@ -1,0 +1,129 @@
+// Simulator scenario: the plain config structs read from config/sim/*.yaml.
+//
+// The keys of DESIGN.md "Simulator scenarios" plus optional extras, all documented in
+// config/sim/README.md. Defaults and units live in the declarations; `load()` only overrides what the
+// file names, and loadScenarioFile() rejects keys that nothing reads.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/common/types.hpp"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace livo::sim {
+
+struct WorldConfig {
+  std::string kind = "room";  ///< room | corridor | street | wall
+  /// room: box [x, y, z]; corridor: [length, width, height]; street: road loop [x, y] + max building
+  /// height z; wall: [distance in front of the start, width, height]. Metres.
+  Eigen::Vector3d size_m{10.0, 8.0, 3.0};
+  std::string texture = "noise";  ///< noise | images | none
+  std::vector<std::string> texture_images;  ///< photos for texture: images (paths relative to the file)
+  double texture_tile_m = 2.0;     ///< images: metres covered by one photo's width
+  double texture_scale_m = 1.0;    ///< noise: wavelength of the coarsest octave, metres
+  double clutter = 0.5;            ///< 0..1: density of furniture / street furniture
+  void load(const ConfigNode& n);
+};
+
+struct TrajectoryConfig {
+  std::string kind = "loop";  ///< loop | lissajous | waypoints
+  double speed_mps = 1.0;     ///< cruise speed limit
+  double max_rot_dps = 60.0;  ///< body angular rate limit (path turns + sway)
+  double max_accel_mps2 = 1.5;  ///< limit of the speed profile's tangential acceleration
+  double static_s = 2.0;      ///< at rest at the start (static initialisation)
+  double ramp_s = 2.0;        ///< C2 ramp from rest to cruise
+  /// Path extents [x, y, z]: loop = rounded rectangle x by y with vertical wave z (peak to peak);
+  /// lissajous = peak-to-peak amplitudes. Zero: chosen from the world.
+  Eigen::Vector3d size_m{0.0, 0.0, 0.0};
+  Eigen::Vector3d center_m{0.0, 0.0, 0.0};  ///< path centre; z = 0 means "height_m"
+  double height_m = 0.0;           ///< carrying height above the floor (0: 1.4 indoor, 1.8 street)
+  double corner_radius_m = 0.0;    ///< loop corner radius (0: half the smaller side, an oval)
+  double start_m = 0.0;            ///< where on the closed path the motion starts (arc length, metres)
+  Eigen::Vector3d frequencies{3.0, 2.0, 5.0};  ///< lissajous: integer frequency ratios x, y, z
+  std::vector<double> waypoints;   ///< waypoints: x, y, z triples of a closed path (>= 3 points)
+  std::vector<double> look_at;     ///< [x, y, z]: yaw faces this point instead of the travel direction
+  double sway_deg = 2.0;           ///< handheld roll / pitch / yaw sway amplitude
+  double bob_m = 0.02;             ///< vertical step bob amplitude
+  double pitch_deg = 0.0;          ///< constant pitch (positive: nose down)
+  void load(const ConfigNode& n);
+};
+
+struct LidarSimConfig {
+  std::string model = "avia";  ///< avia | mid360 | spinning32
+  double rate_hz = 10.0;
+  double range_noise_m = 0.01;   ///< Gaussian sigma on the range
+  double beam_noise_deg = 0.0;   ///< Gaussian sigma of the beam direction (point reported on the nominal one)
+  double max_range_m = 60.0;
+  double blind_m = 0.5;          ///< no return closer than this
+  double max_incidence_deg = 80.0;  ///< no return when the beam meets the surface more obliquely
+  double points_per_second = 0.0;   ///< 0: model default (avia 240k, mid360 200k, spinning32 327680)
+  double beam_divergence_mrad = 3.0;  ///< footprint for the intensity lookup
+  void load(const ConfigNode& n);
+};
+
+struct ImuSimConfig {
+  double rate_hz = 200.0;
+  double gyro_noise = 1.7e-4;       ///< rad/s/sqrt(Hz), continuous-time density
+  double accel_noise = 2.0e-3;      ///< m/s^2/sqrt(Hz)
+  double gyro_bias_walk = 1.9e-5;   ///< rad/s^2/sqrt(Hz)
+  double accel_bias_walk = 3.0e-3;  ///< m/s^3/sqrt(Hz)
+  Eigen::Vector3d gyro_bias_init{0.0, 0.0, 0.0};   ///< rad/s
+  Eigen::Vector3d accel_bias_init{0.0, 0.0, 0.0};  ///< m/s^2
+  void load(const ConfigNode& n);
+};
+
+struct CameraSimConfig {
+  bool enabled = true;
+  std::string model = "pinhole";  ///< pinhole (radtan k1 k2 p1 p2) | equidistant (k1..k4)
+  int width = 640;
+  int height = 512;
+  double fx = 400.0, fy = 400.0, cx = 319.5, cy = 255.5;
+  std::vector<double> distortion{0.0, 0.0, 0.0, 0.0};
+  double max_angle_deg = 95.0;  ///< equidistant: pixels beyond this angle from the axis are black
+  double rate_hz = 10.0;
+  double phase_s = 0.037;       ///< first image time after the start (independent of LiDAR scans)
+  double exposure_jitter = 0.1;  ///< sigma of log(gain), per frame
+  double pixel_noise = 2.0;      ///< Gaussian sigma, gray levels
+  void load(const ConfigNode& n);
+};
+
+struct ExtrinsicsConfig {
+  Eigen::Isometry3d T_imu_lidar = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_imu_camera = defaultCamera();
+  static Eigen::Isometry3d defaultCamera();  ///< forward looking: q = [-0.5, 0.5, -0.5, 0.5]
+  void load(const ConfigNode& n);
+};
+
+/// A complete scenario.
+struct SimScenario {
+  std::string source = "<scenario>";  ///< file name, for error messages
+  std::string base_dir = ".";      ///< folder of the scenario file (relative texture paths)
+  std::int64_t seed = 1;
+  double duration_s = 20.0;
+  double start_time_s = 1.7e9;     ///< epoch of the first sample (exercises large time stamps)
+  std::string environment;         ///< indoor | outdoor; empty: street outdoor, others indoor
+  WorldConfig world;
+  TrajectoryConfig trajectory;
+  LidarSimConfig lidar;
+  ImuSimConfig imu;
+  CameraSimConfig camera;
+  ExtrinsicsConfig extrinsics;
+
+  void load(const ConfigNode& root);
+  /// Throws ConfigError on inconsistent values (naming the key).
+  void validate() const;
+  Utime startUtime() const { return fromSeconds(start_time_s); }
+  std::string environmentOrDefault() const;
+};
+
+/// Loads a scenario file, rejects unknown keys and validates it. Throws ConfigError.
+SimScenario loadScenarioFile(const std::string& path);
+/// Same from a YAML string (tests); `base_dir` resolves relative texture paths.
+SimScenario parseScenario(const std::string& yaml, const std::string& base_dir = ".");
+
+}  // namespace livo::sim

@@ -1,0 +1,249 @@
+#include "livo/sim/simulator.hpp"
+
+#include "parallel.hpp"
+#include "livo/sim/random.hpp"
+#include "livo/sim/world_gen.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace livo::sim {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kCameraMaxRange = 2000.0;  // metres; beyond: sky
+}  // namespace
+
+Simulator::Simulator(SimScenario scenario, SimOptions options)
+    : sc_(std::move(scenario)),
+      opt_(options),
+      traj_((sc_.validate(), sc_.trajectory), sc_.world),
+      world_(makeWorld(sc_, traj_.path())),
+      pattern_(sc_.lidar) {
+  if (sc_.camera.enabled) camera_ = std::make_unique<SimCameraModel>(sc_.camera);
+  start_ = sc_.startUtime();
+  end_ = start_ + fromSeconds(sc_.duration_s);
+  seed_ = static_cast<std::uint64_t>(sc_.seed);
+  gyro_bias_ = sc_.imu.gyro_bias_init;
+  accel_bias_ = sc_.imu.accel_bias_init;
+}
+
+Utime Simulator::imuUtime(std::int64_t k) const {
+  return start_ + static_cast<Utime>(std::llround(static_cast<double>(k) * 1e6 / sc_.imu.rate_hz));
+}
+Utime Simulator::lidarUtime(std::int64_t j) const {
+  return start_ + static_cast<Utime>(std::llround(static_cast<double>(j) * 1e6 / sc_.lidar.rate_hz));
+}
+Utime Simulator::cameraUtime(std::int64_t k) const {
+  return start_ + static_cast<Utime>(std::llround((sc_.camera.phase_s + static_cast<double>(k) / sc_.camera.rate_hz) * 1e6));
+}
+
+void Simulator::exactImu(double t, Vec3& gyro, Vec3& accel) const {
+  const BodyState s = traj_.state(t);
+  gyro = s.omega_body;
+  // Specific force: f = R^T (a - g), g = (0, 0, -9.81).
+  accel = s.T_world_imu.linear().transpose() * (s.a_world + Vec3(0.0, 0.0, kGravity));
+}
+
+// IMU model (Kalibr convention): discrete white noise sigma_d = sigma_c sqrt(rate); the bias is a
+// random walk b_{k+1} = b_k + sigma_bw sqrt(dt) n_k.
+void Simulator::imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth) {
+  const auto& c = sc_.imu;
+  s.utime = imuUtime(k);
+  const double t = relTime(s.utime);
+  const BodyState b = traj_.state(t);
+  truth.T_world_imu = b.T_world_imu;
+  truth.v_world = b.v_world;
+  exactImu(t, truth.gyro, truth.accel);
+  truth.gyro_bias = gyro_bias_;
+  truth.accel_bias = accel_bias_;
+  const double sg = c.gyro_noise * std::sqrt(c.rate_hz), sa = c.accel_noise * std::sqrt(c.rate_hz);
+  const auto kk = static_cast<std::uint64_t>(k);
+  for (int a = 0; a < 3; ++a) {
+    s.gyro[a] = truth.gyro[a] + gyro_bias_[a] + sg * gaussianFromKeys(seed_, RngStream::ImuGyroNoise, kk, a);
+    s.accel[a] = truth.accel[a] + accel_bias_[a] + sa * gaussianFromKeys(seed_, RngStream::ImuAccelNoise, kk, a);
+  }
+  const double sq_dt = std::sqrt(1.0 / c.rate_hz);
+  for (int a = 0; a < 3; ++a) {
+    gyro_bias_[a] += c.gyro_bias_walk * sq_dt * gaussianFromKeys(seed_, RngStream::ImuGyroWalk, kk, a);
+    accel_bias_[a] += c.accel_bias_walk * sq_dt * gaussianFromKeys(seed_, RngStream::ImuAccelWalk, kk, a);
+  }
+}
+
+LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
+  const auto& c = sc_.lidar;
+  LidarScan scan;
+  scan.utime = lidarUtime(j);
+  scan.sensor = c.model;
+  std::vector<LidarRay> rays;
+  const double t0 = relTime(scan.utime);
+  pattern_.rays(t0, rays);
+  const double cos_max = std::cos(c.max_incidence_deg * kPi / 180.0);
+  const double beam_sigma = c.beam_noise_deg * kPi / 180.0;
+  const auto jj = static_cast<std::uint64_t>(j);
+
+  // Contiguous parts of the ray list per thread; each fills its own point list and counters.
+  const int threads = std::clamp(opt_.threads, 1, 16);
+  std::vector<std::vector<LidarPoint>> parts(static_cast<std::size_t>(threads));
+  std::vector<LidarStats> part_stats(static_cast<std::size_t>(threads));
+  runParts(threads, [&](int part, int n_parts) {
+    const std::size_t first = rays.size() * part / n_parts, last = rays.size() * (part + 1) / n_parts;
+    auto& points = parts[static_cast<std::size_t>(part)];
+    auto& st = part_stats[static_cast<std::size_t>(part)];
+    points.reserve(last - first);
+    Pose T_world_lidar = Pose::Identity();
+    float pose_offset = -1.f;
+    for (std::size_t i = first; i < last; ++i) {
+      const LidarRay& r = rays[i];
+      if (r.time_offset_s != pose_offset) {  // rays of one firing share the pose of their time
+        pose_offset = r.time_offset_s;
+        T_world_lidar = traj_.pose(t0 + static_cast<double>(r.time_offset_s)) * sc_.extrinsics.T_imu_lidar;
+      }
+      // The beam leaves along a slightly perturbed direction (beam noise) but the sensor reports the
+      // range along its nominal direction.
+      Vec3 beam = r.dir;
+      if (beam_sigma > 0.0) {
+        const Vec3 e1 = r.dir.unitOrthogonal(), e2 = r.dir.cross(e1);
+        beam = (r.dir + beam_sigma * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i + 1) * e1 +
+                beam_sigma * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i + 2) * e2)
+                   .normalized();
+      }
+      const Vec3 dir_world = T_world_lidar.linear() * beam;
+      const Hit hit = world_.raycast(T_world_lidar.translation(), dir_world, c.max_range_m, c.beam_divergence_mrad * 1e-3);
+      if (!hit.valid) {
+        ++st.no_return;
+        continue;
+      }
+      if (hit.cosIncidence(dir_world) < cos_max) {
+        ++st.grazing;
+        continue;
+      }
+      const double range = hit.distance + c.range_noise_m * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i);
+      if (range < c.blind_m) {
+        ++st.blind;
+        continue;
+      }
+      if (range > c.max_range_m) {
+        ++st.no_return;
+        continue;
+      }
+      LidarPoint p;
+      p.p_lidar = (range * r.dir).cast<float>();
+      p.time_offset_s = r.time_offset_s;
+      p.intensity = static_cast<float>(255.0 * hit.albedo);
+      p.ring = r.ring;
+      points.push_back(p);
+    }
+  });
+  LidarStats local;
+  local.scans = 1;
+  local.rays = rays.size();
+  std::size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  scan.points.reserve(total);
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    scan.points.insert(scan.points.end(), parts[k].begin(), parts[k].end());
+    local.no_return += part_stats[k].no_return;
+    local.blind += part_stats[k].blind;
+    local.grazing += part_stats[k].grazing;
+  }
+  local.points = scan.points.size();
+  if (stats) {
+    stats->scans += local.scans;
+    stats->rays += local.rays;
+    stats->points += local.points;
+    stats->no_return += local.no_return;
+    stats->blind += local.blind;
+    stats->grazing += local.grazing;
+  }
+  return scan;
+}
+
+Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
+  const SimCameraModel& cam = *camera_;
+  Image img;
+  img.utime = cameraUtime(k);
+  img.width = cam.width();
+  img.height = cam.height();
+  img.row_stride = img.width;
+  img.format = PixelFormat::Gray8;
+  img.exposure_time_s = 0.f;  // unknown: the estimator estimates the exposure
+  img.data.assign(static_cast<std::size_t>(img.width) * img.height, 0);
+  const Pose T_wc = T_world_camera(img.utime);
+  // Exposure jitter: a per-frame multiplicative gain, log-normal.
+  const double gain = std::exp(sc_.camera.exposure_jitter * gaussianFromKeys(seed_, RngStream::CameraExposure, static_cast<std::uint64_t>(k)));
+  if (truth) {
+    truth->T_world_camera = T_wc;
+    truth->gain = gain;
+  }
+  const Mat3 R = T_wc.linear();
+  const Vec3 origin = T_wc.translation();
+  const double sigma = sc_.camera.pixel_noise;
+  auto renderRows = [&](int first, int step) {  // rows first, first + step, ...
+    int hint = -1;
+    for (int r = first; r < img.height; r += step)
+      for (int c = 0; c < img.width; ++c) {
+        const std::size_t i = static_cast<std::size_t>(r) * img.width + c;
+        if (!cam.valid()[i]) continue;
+        const Vec3 dir = R * cam.rays()[i].cast<double>();
+        const Hit hit = world_.raycast(origin, dir, kCameraMaxRange, cam.pixelAngle()[i], &hint);
+        const double radiance = hit.valid ? world_.radiance(hit) : World::skyRadiance(dir);
+        const double value = kGrayPerRadiance * gain * radiance +
+                             sigma * gaussianFromKeys(seed_, RngStream::CameraPixel, static_cast<std::uint64_t>(k), i);
+        img.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+      }
+  };
+  runParts(std::clamp(opt_.threads, 1, 16), renderRows);
+  return img;
+}
+
+bool Simulator::next(SimEvent& ev) {
+  const Utime t_imu = imuUtime(next_imu_);
+  const Utime t_scan = lidarUtime(next_scan_);
+  const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
+  const Utime t = std::min({t_imu, t_scan, t_cam});
+  if (t >= end_) return false;
+  ev.utime = t;
+  if (t == t_imu) {
+    ev.kind = SimEvent::Kind::Imu;
+    imuSample(next_imu_++, ev.imu, ev.imu_truth);
+  } else if (t == t_scan) {
+    ev.kind = SimEvent::Kind::Lidar;
+    ev.scan = lidarScan(next_scan_++, &stats_);
+  } else {
+    ev.kind = SimEvent::Kind::Image;
+    ev.image = renderImage(next_image_++, &ev.image_truth);
+  }
+  return true;
+}
+
+void Simulator::run(const SimCallbacks& cb) {
+  for (;;) {
+    const Utime t_imu = imuUtime(next_imu_);
+    const Utime t_scan = lidarUtime(next_scan_);
+    const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
+    const Utime t = std::min({t_imu, t_scan, t_cam});
+    if (t >= end_) return;
+    if (t == t_imu) {
+      ImuSample s;
+      ImuTruth truth;
+      imuSample(next_imu_++, s, truth);  // always: the bias walk is sequential
+      if (cb.imu) cb.imu(s, truth);
+    } else if (t == t_scan) {
+      if (cb.lidar) cb.lidar(lidarScan(next_scan_, &stats_));
+      ++next_scan_;
+    } else {
+      if (cb.image) {
+        ImageTruth truth;
+        const Image img = renderImage(next_image_, &truth);
+        cb.image(img, truth);
+      }
+      ++next_image_;
+    }
+  }
+}
+
+void Simulator::writeRigConfig(std::ostream& out) const { sim::writeRigConfig(sc_, out); }
+
+}  // namespace livo::sim
