@@ -1,0 +1,56 @@
+// Sequential photometric ESIKF update (ALGORITHMS.md section 4), run after the LiDAR update at the
+// same time stamp: coarse-to-fine over the patch pyramid levels, the reference patch warped into the
+// current view by the affine map of its plane, inverse exposure time estimated in the state, an
+// iteration that raises the photometric error rolled back, outliers gated.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/state.hpp"
+#include "livo/map/visual_point.hpp"
+#include "livo/sensors/camera_model.hpp"
+
+#include <vector>
+
+namespace livo {
+
+struct VioConfig {
+  int max_iterations = 5;          ///< per pyramid level
+  double pixel_noise = 3.0;        ///< photometric sigma, gray levels (camera.pixel_noise)
+  double outlier_rms = 30.0;       ///< a point whose level-0 RMS error exceeds this is not used, gray levels
+  bool estimate_exposure = true;   ///< tau in the state (else held)
+  bool normal_warp = true;         ///< affine warp from the plane normal (else identity)
+  double converge_rot_deg = 0.001;
+  double converge_pos_m = 1e-5;
+
+  /// Reads the `vio` section (and pixel_noise from `camera`).
+  void load(const ConfigNode& root);
+};
+
+struct VioUpdateResult {
+  int points_used = 0;             ///< points that passed the gates
+  int points_rejected = 0;         ///< gated as outliers or unusable (warp/border)
+  int iterations = 0;              ///< over all levels
+  int rollbacks = 0;               ///< iterations reverted because the error rose
+  double rms_before = 0.0;         ///< level-0 RMS photometric error at the prior, gray levels
+  double rms_after = 0.0;          ///< at the posterior
+  std::vector<double> point_rms;   ///< per input point, level-0 RMS after the update (-1: not used)
+  std::vector<Vec2> point_px;      ///< per input point, its pixel in the current image at the posterior
+};
+
+/// One residual of a patch pixel: r = tau_k I_k(u) - tau_r P_ref, and its row d r / d [dtheta, dp, dtau].
+/// Exposed for the Jacobian tests. Returns false when a sample falls outside the image or the crop.
+bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
+                         const VisualPoint& p, const Eigen::Matrix2d& A_ref_from_cur, int level, int row, int col,
+                         double& r, Eigen::Matrix<double, 1, 7>* H);
+
+/// Affine map of pixel displacements from the current image to the reference one, d px_ref / d px_cur,
+/// from the point's plane (position + normal), by central differences through both camera models.
+/// Identity when the plane is seen edge-on or a projection fails.
+Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& ref, const Pose& T_world_camera,
+                               const CameraModel& cam);
+
+/// Runs the update. `points` come from the visual map's retrieval (each with a reference).
+VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg);
+
+}  // namespace livo

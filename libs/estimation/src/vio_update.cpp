@@ -1,0 +1,237 @@
+#include "livo/estimation/vio_update.hpp"
+
+#include <cmath>
+#include <limits>
+
+namespace livo {
+
+void VioConfig::load(const ConfigNode& root) {
+  if (root.has("camera")) root.section("camera").get("pixel_noise", pixel_noise);
+  const ConfigNode n = root.section("vio");
+  n.get("max_iterations", max_iterations).get("outlier_rms", outlier_rms);
+  n.get("estimate_exposure", estimate_exposure).get("normal_warp", normal_warp);
+  n.get("converge_rot_deg", converge_rot_deg).get("converge_pos_m", converge_pos_m);
+  n.check(max_iterations >= 1 && max_iterations <= 50, "max_iterations", "must be in 1..50");
+  n.check(outlier_rms > 0, "outlier_rms", "must be > 0");
+  n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
+}
+
+namespace {
+
+using Row7 = Eigen::Matrix<double, 1, 7>;
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+using Vec7 = Eigen::Matrix<double, 7, 1>;
+
+struct PointState {
+  const VisualPoint* point = nullptr;
+  const VisualObservation* ref = nullptr;
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // d px_ref / d px_cur
+  bool used = false;
+};
+
+struct Linearization {
+  Mat7 HtRH = Mat7::Zero();
+  Vec7 HtRz = Vec7::Zero();
+  double cost = 0.0;
+  std::size_t n = 0;
+};
+
+bool projectPoint(const NavState& x, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w, Vec3& p_i,
+                  Vec3& p_c, Vec2& px, Eigen::Matrix<double, 2, 3>* J) {
+  p_i = x.R_world_imu.transpose() * (p_w - x.p_world_imu);
+  p_c = T_imu_camera.linear().transpose() * (p_i - T_imu_camera.translation());
+  return cam.project(p_c, px, J);
+}
+
+}  // namespace
+
+Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& ref, const Pose& T_world_camera,
+                               const CameraModel& cam) {
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  Vec2 px_cur;
+  if (!cam.project(T_world_camera.inverse() * p.p_world, px_cur)) return A;
+  const Pose T_ref_world = ref.T_world_camera.inverse();
+  const Vec3 c = T_world_camera.translation();
+  const double h = 2.0;  // pixels
+  for (int axis = 0; axis < 2; ++axis) {
+    Vec2 px_ref[2];
+    for (int s = 0; s < 2; ++s) {
+      Vec2 q = px_cur;
+      q[axis] += s == 0 ? h : -h;
+      Vec3 bearing;
+      if (!cam.unproject(q, bearing)) return Eigen::Matrix2d::Identity();
+      const Vec3 dir = T_world_camera.linear() * bearing;
+      const double denom = p.normal.dot(dir);
+      if (std::abs(denom) < 1e-3) return Eigen::Matrix2d::Identity();  // plane seen edge-on
+      const double t = p.normal.dot(p.p_world - c) / denom;
+      if (!(t > 0)) return Eigen::Matrix2d::Identity();
+      if (!cam.project(T_ref_world * (c + t * dir), px_ref[s])) return Eigen::Matrix2d::Identity();
+    }
+    A.col(axis) = (px_ref[0] - px_ref[1]) / (2 * h);
+  }
+  if (!A.allFinite() || std::abs(A.determinant()) < 1e-3) return Eigen::Matrix2d::Identity();
+  return A;
+}
+
+bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
+                         const VisualPoint& p, const Eigen::Matrix2d& A, int level, int row, int col, double& r,
+                         Row7* H) {
+  const VisualObservation* ref = p.referenceObs();
+  if (!ref) return false;
+  Vec3 p_i, p_c;
+  Vec2 px;
+  Eigen::Matrix<double, 2, 3> J;
+  if (!projectPoint(x, T_imu_camera, cam, p.p_world, p_i, p_c, px, H ? &J : nullptr)) return false;
+  const double stride = double(1 << level);
+  const Vec2 o(patchOffset(col), patchOffset(row));  // level units
+  const Vec2 u = px + o * stride;
+  float I = 0, Ixp = 0, Ixm = 0, Iyp = 0, Iym = 0, P_ref = 0;
+  const Vec2 d_ref = A * o;  // the same displacement in the reference, level units
+  if (!ref->patch.sample(level, d_ref.x(), d_ref.y(), P_ref)) return false;
+  if (!sampleBilinear(gray, u.x(), u.y(), I)) return false;
+  r = x.inv_exposure * I - double(ref->inv_exposure) * P_ref;
+  if (H) {
+    if (!sampleBilinear(gray, u.x() + stride, u.y(), Ixp) || !sampleBilinear(gray, u.x() - stride, u.y(), Ixm) ||
+        !sampleBilinear(gray, u.x(), u.y() + stride, Iyp) || !sampleBilinear(gray, u.x(), u.y() - stride, Iym))
+      return false;
+    const Eigen::RowVector2d g((Ixp - Ixm) / (2 * stride), (Iyp - Iym) / (2 * stride));
+    const Eigen::RowVector3d dr_dpc = x.inv_exposure * g * J;
+    const Mat3 R_ci = T_imu_camera.linear().transpose();
+    H->segment<3>(0) = dr_dpc * R_ci * hat(p_i);                        // d/d dtheta
+    H->segment<3>(3) = -dr_dpc * R_ci * x.R_world_imu.transpose();      // d/d dp
+    (*H)(6) = I;                                                        // d/d dtau
+  }
+  return true;
+}
+
+namespace {
+
+constexpr int kN = PatchPyramid::kSize;
+
+/// RMS of a point's patch residuals at one level; -1 when fewer than half the samples are usable.
+double pointRms(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic, const PointState& ps,
+                int level) {
+  double sq = 0;
+  int n = 0;
+  for (int row = 0; row < kN; ++row)
+    for (int col = 0; col < kN; ++col) {
+      double r;
+      if (!photometricResidual(x, gray, cam, T_ic, *ps.point, ps.A, level, row, col, r, nullptr)) continue;
+      sq += r * r;
+      ++n;
+    }
+  return n >= kN * kN / 2 ? std::sqrt(sq / n) : -1.0;
+}
+
+Linearization linearize(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
+                        const std::vector<PointState>& pts, int level, double inv_var, bool exposure) {
+  Linearization lin;
+  Row7 H;
+  for (const auto& ps : pts) {
+    if (!ps.used) continue;
+    for (int row = 0; row < kN; ++row)
+      for (int col = 0; col < kN; ++col) {
+        double r;
+        if (!photometricResidual(x, gray, cam, T_ic, *ps.point, ps.A, level, row, col, r, &H)) continue;
+        if (!exposure) H(6) = 0.0;
+        lin.HtRH.noalias() += H.transpose() * H * inv_var;
+        lin.HtRz.noalias() += H.transpose() * r * inv_var;
+        lin.cost += r * r;
+        ++lin.n;
+      }
+  }
+  return lin;
+}
+
+}  // namespace
+
+VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg) {
+  VioUpdateResult res;
+  res.point_rms.assign(points.size(), -1.0);
+  res.point_px.assign(points.size(), Vec2::Zero());
+  const NavState x_prop = x;
+  const StateCov P_prop = P;
+  const Pose T_world_camera = x.pose() * T_imu_camera;
+
+  // 1. Per point: warp from the plane normal, and the outlier gate at level 0 at the prior.
+  std::vector<PointState> pts(points.size());
+  double sq_before = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    PointState& ps = pts[i];
+    ps.point = points[i];
+    ps.ref = points[i] ? points[i]->referenceObs() : nullptr;
+    if (!ps.ref) {
+      ++res.points_rejected;
+      continue;
+    }
+    if (cfg.normal_warp) ps.A = warpRefFromCur(*ps.point, *ps.ref, T_world_camera, cam);
+    const double rms = pointRms(x, gray, cam, T_imu_camera, ps, 0);
+    ps.used = rms >= 0 && rms <= cfg.outlier_rms;
+    if (ps.used) {
+      ++res.points_used;
+      sq_before += rms * rms;
+    } else {
+      ++res.points_rejected;
+    }
+  }
+  if (res.points_used == 0) return res;
+  res.rms_before = std::sqrt(sq_before / res.points_used);
+
+  // 2. Coarse to fine: iterated updates per level, information form over [dtheta, dp, dtau] (the
+  //    first 7 error-state entries), rolling back an iteration that raises the mean squared error.
+  const double inv_var = 1.0 / (cfg.pixel_noise * cfg.pixel_noise);
+  const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
+  StateCov K_bar = P_prop;
+  bool have_K = false;
+  const double conv_rot = cfg.converge_rot_deg * M_PI / 180.0;
+  for (int level = PatchPyramid::kLevels - 1; level >= 0; --level) {
+    NavState x_prev = x;
+    double prev_mse = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < cfg.max_iterations; ++it) {
+      const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, cfg.estimate_exposure);
+      if (lin.n == 0) break;
+      const double mse = lin.cost / double(lin.n);
+      if (mse > prev_mse) {  // the last step made things worse: undo it and end this level
+        x = x_prev;
+        ++res.rollbacks;
+        break;
+      }
+      prev_mse = mse;
+      x_prev = x;
+      StateCov info = P_prop_inv;
+      info.topLeftCorner<7, 7>() += lin.HtRH;
+      K_bar = info.ldlt().solve(StateCov::Identity());
+      have_K = true;
+      const StateVec Delta = x_prop.boxminus(x);
+      StateVec g = StateVec::Zero();
+      g.head<7>() = lin.HtRz + lin.HtRH * Delta.head<7>();
+      const StateVec delta = Delta - K_bar * g;
+      x = x.boxplus(delta);
+      ++res.iterations;
+      if (delta.segment<3>(sidx::kRot).norm() < conv_rot && delta.segment<3>(sidx::kPos).norm() < cfg.converge_pos_m)
+        break;
+    }
+  }
+  // 3. Covariance once, from the last linearisation: P = (I - K_bar H^T R^-1 H) P_prop = K_bar.
+  if (have_K) P = 0.5 * (K_bar + K_bar.transpose());
+
+  // 4. Per-point errors at the posterior (the visual map drops points that stay bad).
+  double sq_after = 0;
+  int n_after = 0;
+  const Pose T_wc_post = x.pose() * T_imu_camera;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!pts[i].ref) continue;
+    cam.project(T_wc_post.inverse() * pts[i].point->p_world, res.point_px[i]);
+    if (!pts[i].used) continue;
+    res.point_rms[i] = pointRms(x, gray, cam, T_imu_camera, pts[i], 0);
+    if (res.point_rms[i] >= 0) {
+      sq_after += res.point_rms[i] * res.point_rms[i];
+      ++n_after;
+    }
+  }
+  res.rms_after = n_after ? std::sqrt(sq_after / n_after) : 0.0;
+  return res;
+}
+
+}  // namespace livo

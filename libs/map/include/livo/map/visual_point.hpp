@@ -1,0 +1,74 @@
+// Visual map points: LiDAR points that carry small patch pyramids from the images that saw them
+// (ALGORITHMS.md sections 4-5). Unlike the reference code, an observation never keeps a whole image
+// alive: it stores one small crop per pyramid level (section 8, "Memory" 1).
+#pragma once
+
+#include "livo/common/so3.hpp"
+#include "livo/common/types.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace livo {
+
+using Vec2 = Eigen::Vector2d;
+
+/// Patch pyramid of one observation. Level l samples the full-resolution image (bilinear) on a grid of
+/// stride 2^l pixels centred on the point's pixel: the patch proper is kSize x kSize samples, and the
+/// crop keeps kMargin extra samples on every side so that a reference patch can be resampled under a
+/// moderate affine warp without the original image.
+struct PatchPyramid {
+  static constexpr int kLevels = 3;
+  static constexpr int kSize = 8;    ///< patch side, samples
+  static constexpr int kMargin = 2;  ///< extra samples per side for warping
+  static constexpr int kCrop = kSize + 2 * kMargin;  ///< crop side, samples (12)
+  static constexpr int kCropValues = kCrop * kCrop;
+  std::array<float, kLevels * kCropValues> values{};  ///< level-major, row-major gray values
+
+  float at(int level, int row, int col) const { return values[std::size_t(level * kCropValues + row * kCrop + col)]; }
+  float& at(int level, int row, int col) { return values[std::size_t(level * kCropValues + row * kCrop + col)]; }
+  /// Bilinear sample at a position in level-`level` sample units relative to the crop centre (the
+  /// point's pixel); false when it falls outside the crop.
+  bool sample(int level, double dx, double dy, float& out) const;
+};
+
+/// Sample offsets of the patch proper in level units: -kSize/2 + 0.5 ... kSize/2 - 0.5 (centred).
+inline double patchOffset(int i) { return double(i) - 0.5 * double(PatchPyramid::kSize - 1); }
+
+/// Fills `out` from a GRAY8 image around pixel `px` (level-0 pixel coordinates, pixel centres at
+/// integers). Returns false when any sample of any level would read outside the image.
+bool extractPatchPyramid(const Image& gray, const Vec2& px, PatchPyramid& out);
+/// Bilinear gray value at `px`; false outside [0, w-1] x [0, h-1].
+bool sampleBilinear(const Image& gray, double x, double y, float& out);
+
+/// One stored observation of a visual point.
+struct VisualObservation {
+  Utime utime = 0;
+  PatchPyramid patch;
+  Pose T_world_camera = Pose::Identity();  ///< camera pose at capture
+  Vec2 px = Vec2::Zero();                  ///< pixel of the point in that image (level 0)
+  float inv_exposure = 1.f;                ///< tau of that image
+  float score = 0.f;                       ///< reference score (mean |NCC| + view cosine)
+};
+
+/// A visual map point.
+struct VisualPoint {
+  std::int64_t id = 0;
+  Vec3 p_world = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();   ///< unit normal facing the cameras (from the LiDAR plane)
+  Mat3 cov = Mat3::Zero();       ///< position covariance, m^2
+  std::vector<VisualObservation> obs;  ///< newest last
+  int reference = -1;            ///< index into obs of the reference patch (-1: none)
+  bool converged = false;        ///< normal converged: only the reference is kept
+  int bad_updates = 0;           ///< consecutive updates with a high photometric error
+  Utime last_seen = 0;
+
+  const VisualObservation* referenceObs() const {
+    return reference >= 0 && reference < int(obs.size()) ? &obs[std::size_t(reference)] : nullptr;
+  }
+  /// Heap + inline bytes of this point (for the map's memory accounting).
+  std::size_t bytes() const { return sizeof(VisualPoint) + obs.capacity() * sizeof(VisualObservation); }
+};
+
+}  // namespace livo
