@@ -1,0 +1,182 @@
+// Visual map (ALGORITHMS.md sections 4.2 and 5): visual points in a hash of root voxels, retrieved
+// per frame from the voxels the current scan touches, created from plane-matched LiDAR points in free
+// grid cells, with observation, reference-selection, normal-refinement and outlier rules.
+//
+// Fixes to the reference code: floor keys everywhere (no off-by-one voxel for negative coordinates),
+// the LiDAR plane is looked up with the LiDAR map's own voxel size, new points must lie in front of
+// the camera (#421), the observation rules compare with the NEWEST observation, the border keeps
+// every crop sample of every level inside the image (#69), observations keep small patch crops
+// instead of whole images, and the map can be pruned (extract / idsOutsideBox / removeBadPoints).
+//
+// Ownership and pointers: every point lives in its own heap block (std::unique_ptr), so a
+// VisualPoint* handed out (pointsInView, find, forEach) stays valid until THAT point leaves the map
+// (removeBadPoints, extract, clear, destruction); adding or removing other points never moves it.
+// Callers may change a point's observations, normal, reference and counters through the pointer, but
+// must not change p_world or id while it is in the map (extract, change, insert instead): the voxel
+// index is keyed on them.
+// Thread safety: const member functions may run concurrently; everything else needs exclusive access.
+#pragma once
+
+#include "livo/map/visual_map_config.hpp"
+#include "livo/map/visual_point.hpp"
+#include "livo/map/voxel_key.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+namespace livo {
+
+class CameraModel;
+class VoxelMap;
+
+/// Selection grid over the processed image: cells of cell_px x cell_px, the last row / column
+/// possibly partial (ceil), so every pixel has a cell. Cell index = row * cols + col.
+struct ImageGrid {
+  int cell_px = 30;
+  int cols = 0;
+  int rows = 0;
+
+  ImageGrid() = default;
+  ImageGrid(int width, int height, int cell_px);
+  int size() const { return cols * rows; }
+  /// Cell of a pixel position, -1 outside the grid.
+  int cellOf(const Vec2& px) const;
+};
+
+/// A LiDAR point that matched a plane: a candidate for a new visual point (ALGORITHMS.md 5.1).
+struct NewPointCandidate {
+  Vec3 p_world = Vec3::Zero();
+  Vec3 normal_world = Vec3::UnitZ();  ///< plane normal (any sign; flipped to face the camera)
+  Mat3 cov_world = Mat3::Zero();      ///< position covariance, m^2
+};
+
+/// Counters of the last pointsInView call.
+struct VisualRetrievalStats {
+  std::size_t visual_voxels = 0;    ///< distinct visual voxels holding a scan point
+  std::size_t searched_points = 0;  ///< points in those voxels
+  std::size_t in_image = 0;         ///< in front, inside the border, with a reference observation
+  std::size_t occluded = 0;         ///< per-cell winners rejected by the depth test
+  std::size_t selected = 0;         ///< points returned
+};
+
+class VisualMap {
+ public:
+  explicit VisualMap(VisualMapConfig config = {});
+  ~VisualMap();
+  VisualMap(VisualMap&&) noexcept;
+  VisualMap& operator=(VisualMap&&) noexcept;
+  VisualMap(const VisualMap&) = delete;
+  VisualMap& operator=(const VisualMap&) = delete;
+
+  /// The selection grid for a camera (config grid_cell_px).
+  ImageGrid gridFor(const CameraModel& cam) const;
+
+  /// Visual points to use for one image (ALGORITHMS.md 4.2). Only the visual voxels that hold a scan
+  /// point (world frame, floor keys) are searched. A point qualifies when it has a reference
+  /// observation, lies at depth z >= min_depth_m in the camera frame, projects and lies inside the
+  /// border_px border; per grid cell the qualifying point with the smallest depth z wins (ties: smaller
+  /// id). A winner is occluded (dropped, its cell stays free) when a scan point projected within
+  /// +-occlusion_window_px of its pixel (rounded) is closer in depth by more than occlusion_depth_m.
+  /// Results are ordered by cell index; `pixels` (optional) receives the projections. The occupied
+  /// cells (cells with a returned point) are kept for addPoints: see occupiedCells().
+  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
+                                         const std::vector<Vec3>& scan_points_world,
+                                         std::vector<Vec2>* pixels = nullptr);
+  /// Occupied cells of the last pointsInView call (size gridFor(cam).size()).
+  const std::vector<bool>& occupiedCells() const { return occupied_; }
+  const VisualRetrievalStats& lastRetrieval() const { return retrieval_; }
+
+  /// Creates visual points (ALGORITHMS.md 5.1): a candidate qualifies when it lies at depth
+  /// z >= min_depth_m (in front of the camera: fix of #421), projects inside the border and its cell
+  /// is not occupied (`occupied_cells`: one flag per grid cell, or empty = all free). Per free cell the
+  /// candidate with the highest Shi-Tomasi score (> min_shi_tomasi) is kept. Each new point gets a new
+  /// id, the plane normal flipped to face the camera, and one observation (the patch pyramid of
+  /// `gray` at its pixel), which is its reference. Returns the number created.
+  /// Throws std::invalid_argument when `gray` is not Gray8 of the camera's size or occupied_cells has
+  /// the wrong size.
+  int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
+                Utime t, const std::vector<NewPointCandidate>& candidates,
+                const std::vector<bool>& occupied_cells);
+
+  /// Adds an observation of `p` at pixel `px` of `gray` (ALGORITHMS.md 5.2) when, compared with the
+  /// NEWEST observation (obs.back()), the camera moved more than new_obs_min_translation_m, the view
+  /// ray from the point turned more than new_obs_min_angle_deg, or the pixel moved more than
+  /// new_obs_min_pixel_shift_px (always when the point has none). Converged points are frozen (no new
+  /// observations). Beyond max_observations the lowest-scoring observation is dropped (scores
+  /// recomputed as in refine), never the reference nor the new one; the reference index follows.
+  /// Sets p.last_seen = t. Returns true when an observation was added.
+  bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
+                      float inv_exposure, Utime t);
+
+  /// Reference selection and normal refinement (ALGORITHMS.md 5.3). Scores every observation:
+  ///   score_i = mean_{j != i} |NCC(level-0 patch i, level-0 patch j)| + cos(ray_i, n),
+  /// ray_i = unit vector from the point to camera i. The patches are compared without warping them
+  /// into a common view, so NCC is only an approximation of photometric agreement (good for small
+  /// viewpoint changes, biased low for large ones; this only ranks observations). The best becomes
+  /// the reference. From refine_min_observations observations on, the normal is replaced by the
+  /// LiDAR plane's (VoxelMap::findBestPlane: its 3-radius and 3-sigma gates, the map's own voxel size),
+  /// with the sign of the previous normal; when it moved less than normal_converge and the point has
+  /// at least converge_min_observations observations it is converged: only the reference
+  /// observation is kept. `lidar_map` may be null (no normal refinement).
+  void refine(VisualPoint& p, const VoxelMap* lidar_map);
+
+  /// Outlier bookkeeping (ALGORITHMS.md 5.5): an update with mean_sq_error > gate counts as bad,
+  /// anything else resets the count of consecutive bad updates.
+  void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate);
+  /// Removes the points that went over max_bad_updates consecutive bad updates (as reported through
+  /// this map's reportPhotometricError since the last call) and are still over; returns the count.
+  std::size_t removeBadPoints();
+
+  // Housekeeping for the hybrid map.
+  std::size_t size() const { return by_id_.size(); }
+  /// Memory in bytes: both hash tables (buckets + nodes), each point (struct + observation vector
+  /// capacity) and the voxel id lists, plus 16 bytes of allocator overhead per heap block (glibc).
+  /// Walks every point: call at stats rate. The retrieval scratch buffers are not included (see
+  /// scratchBytes), so this grows and shrinks with the points only.
+  std::size_t bytes() const;
+  /// Retrieval scratch memory: the sparse depth image (4 bytes per pixel, allocated by the first
+  /// pointsInView), the cell flags and the voxel list.
+  std::size_t scratchBytes() const;
+  std::size_t numVoxels() const { return voxels_.size(); }
+  void forEach(const std::function<void(const VisualPoint&)>& f) const;
+  void forEach(const std::function<void(VisualPoint&)>& f);
+  /// Ids of the points whose root voxel centre lies outside the axis-aligned cube of half edge
+  /// `half_edge_m` around `center` (same criterion as VoxelMap::removeOutsideBox).
+  std::vector<std::int64_t> idsOutsideBox(const Vec3& center, double half_edge_m) const;
+  /// Removes a point and hands it over (null when the id is unknown).
+  std::unique_ptr<VisualPoint> extract(std::int64_t id);
+  /// Takes a point (e.g. from another VisualMap) keeping its id. Returns false (point dropped) when it
+  /// is null, its position is not finite or its id is already used here. Later ids stay above it.
+  bool insert(std::unique_ptr<VisualPoint> point);
+  VisualPoint* find(std::int64_t id);
+  const VisualPoint* find(std::int64_t id) const;
+  void clear();
+
+  VoxelKey keyOf(const Vec3& p) const { return VoxelKey::fromPoint(p, config_.voxel_size_m); }
+  const VisualMapConfig& config() const { return config_; }
+
+ private:
+  /// Scores every observation of p (see refine) and returns the index of the best (-1: none).
+  int scoreObservations(VisualPoint& p) const;
+  void index(VisualPoint* p);
+  void unindex(const VisualPoint* p);
+
+  VisualMapConfig config_;
+  std::unordered_map<std::int64_t, std::unique_ptr<VisualPoint>> by_id_;
+  std::unordered_map<VoxelKey, std::vector<VisualPoint*>, VoxelKeyHash> voxels_;
+  std::int64_t next_id_ = 1;
+  std::vector<std::int64_t> suspects_;  ///< ids whose bad-update count went over the limit
+
+  // Per-call state of pointsInView (kept to avoid reallocations).
+  std::vector<bool> occupied_;
+  VisualRetrievalStats retrieval_;
+  std::vector<float> depth_;        ///< sparse depth image, 0 = no scan point
+  std::vector<int> depth_touched_;  ///< pixels set in depth_ (reset after each call)
+  std::vector<const std::vector<VisualPoint*>*> searched_;  ///< visual voxels to search
+};
+
+}  // namespace livo
