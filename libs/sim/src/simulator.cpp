@@ -105,9 +105,9 @@ LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
       Vec3 beam = r.dir;
       if (beam_sigma > 0.0) {
         const Vec3 e1 = r.dir.unitOrthogonal(), e2 = r.dir.cross(e1);
-        beam = (r.dir + beam_sigma * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i + 1) * e1 +
-                beam_sigma * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i + 2) * e2)
-                   .normalized();
+        double n1, n2;
+        gaussianPairFromKeys(seed_, RngStream::LidarBeam, jj, i, n1, n2);
+        beam = (r.dir + beam_sigma * (n1 * e1 + n2 * e2)).normalized();
       }
       const Vec3 dir_world = T_world_lidar.linear() * beam;
       const Hit hit = world_.raycast(T_world_lidar.translation(), dir_world, c.max_range_m, c.beam_divergence_mrad * 1e-3);
@@ -119,7 +119,7 @@ LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
         ++st.grazing;
         continue;
       }
-      const double range = hit.distance + c.range_noise_m * gaussianFromKeys(seed_, RngStream::LidarRange, jj, 3 * i);
+      const double range = hit.distance + c.range_noise_m * gaussianFromKeys(seed_, RngStream::LidarRange, jj, i);
       if (range < c.blind_m) {
         ++st.blind;
         continue;
@@ -180,18 +180,25 @@ Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
   const Mat3 R = T_wc.linear();
   const Vec3 origin = T_wc.translation();
   const double sigma = sc_.camera.pixel_noise;
+  // Pixel noise: one Box-Muller pair per two horizontally adjacent pixels (keys: frame, row, pair).
+  const std::size_t width = static_cast<std::size_t>(img.width);
   auto renderRows = [&](int first, int step) {  // rows first, first + step, ...
-    int hint = -1;
     for (int r = first; r < img.height; r += step)
-      for (int c = 0; c < img.width; ++c) {
-        const std::size_t i = static_cast<std::size_t>(r) * img.width + c;
-        if (!cam.valid()[i]) continue;
-        const Vec3 dir = R * cam.rays()[i].cast<double>();
-        const Hit hit = world_.raycast(origin, dir, kCameraMaxRange, cam.pixelAngle()[i], &hint);
-        const double radiance = hit.valid ? world_.radiance(hit) : World::skyRadiance(dir);
-        const double value = kGrayPerRadiance * gain * radiance +
-                             sigma * gaussianFromKeys(seed_, RngStream::CameraPixel, static_cast<std::uint64_t>(k), i);
-        img.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+      for (int c = 0; c < img.width; c += 2) {
+        double noise[2] = {0.0, 0.0};
+        const std::size_t i0 = static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c);
+        if (sigma > 0.0)
+          gaussianPairFromKeys(seed_, RngStream::CameraPixel, static_cast<std::uint64_t>(k),
+                               (static_cast<std::uint64_t>(r) << 32) | static_cast<std::uint64_t>(c / 2), noise[0], noise[1]);
+        for (int h = 0; h < 2 && c + h < img.width; ++h) {
+          const std::size_t i = i0 + static_cast<std::size_t>(h);
+          if (!cam.valid()[i]) continue;
+          const Vec3 dir = R * cam.rays()[i].cast<double>();
+          const Hit hit = world_.raycast(origin, dir, kCameraMaxRange, cam.pixelAngle()[i]);
+          const double radiance = hit.valid ? world_.radiance(hit) : World::skyRadiance(dir);
+          const double value = kGrayPerRadiance * gain * radiance + sigma * noise[h];
+          img.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+        }
       }
   };
   runParts(std::clamp(opt_.threads, 1, 16), renderRows);

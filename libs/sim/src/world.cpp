@@ -265,11 +265,9 @@ void World::finish(Hit& h, const Vec3& origin, const Vec3& dir, double footprint
   h.albedo = albedoAt(h.surface, h.u, h.v, footprint);
 }
 
-Hit World::raycast(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad, int* hint) const {
+Hit World::raycast(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad) const {
   Hit best;
   if (nodes_.empty()) return best;
-  // A likely primitive first (e.g. the neighbouring pixel's): its hit bounds the traversal.
-  if (hint && *hint >= 0 && *hint < static_cast<int>(prims_.size())) intersect(*hint, origin, dir, max_range, best);
   float o[3], inv[3];
   for (int a = 0; a < 3; ++a) {
     o[a] = static_cast<float>(origin[a]);
@@ -311,7 +309,6 @@ Hit World::raycast(const Vec3& origin, const Vec3& dir, double max_range, double
       if (tr <= lim) push(n.right, tr);
     }
   }
-  if (hint) *hint = best.valid ? best.surface / kFacesPerPrimitive : -1;
   finish(best, origin, dir, footprint_rad);
   return best;
 }

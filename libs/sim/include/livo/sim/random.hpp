@@ -23,6 +23,7 @@ enum class RngStream : std::uint64_t {
   CameraPixel = 7,
   CameraExposure = 8,
   Texture = 9,
+  LidarBeam = 10,
 };
 
 inline std::uint64_t mix64(std::uint64_t z) {
@@ -51,6 +52,16 @@ inline double gaussianFromKeys(std::uint64_t seed, RngStream s, std::uint64_t i,
   const double u1 = uniformFromHash(h);
   const double u2 = uniformFromHash(mix64(h ^ 0xD1B54A32D192ED03ull));
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+}
+
+/// The pair of independent standard normal values of one Box-Muller draw (cosine and sine branches).
+inline void gaussianPairFromKeys(std::uint64_t seed, RngStream s, std::uint64_t i, std::uint64_t j, double& a, double& b) {
+  const std::uint64_t h = hashKeys(seed, static_cast<std::uint64_t>(s), i, j);
+  const double u1 = uniformFromHash(h);
+  const double u2 = uniformFromHash(mix64(h ^ 0xD1B54A32D192ED03ull));
+  const double r = std::sqrt(-2.0 * std::log(u1)), phi = 6.283185307179586 * u2;
+  a = r * std::cos(phi);
+  b = r * std::sin(phi);
 }
 
 /// Sequential generator for set-up work (world layout): deterministic for a seed.

@@ -49,10 +49,8 @@ class World {
   World(std::vector<Primitive> primitives, TextureBank textures, std::uint64_t seed);
 
   /// First hit along origin + t dir, 0 < t <= max_range; `dir` must be a unit vector. The albedo is
-  /// averaged over a footprint of `footprint_rad` * distance / cos(incidence) metres. `hint` (optional)
-  /// names a primitive to test first and receives the one hit (-1: none); it only changes the speed.
-  Hit raycast(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad = 0.0,
-              int* hint = nullptr) const;
+  /// averaged over a footprint of `footprint_rad` * distance / cos(incidence) metres.
+  Hit raycast(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad = 0.0) const;
   /// Same result without the BVH (test oracle, slow).
   Hit raycastBruteForce(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad = 0.0) const;
   /// Unsigned distance from a point to the nearest surface (brute force, test oracle).
