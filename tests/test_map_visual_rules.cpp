@@ -139,6 +139,16 @@ TEST(VisualObservations, MaxObservationsDropsLowestScoreNeverReference) {
   EXPECT_EQ(q.obs[0].px.x(), 100.0);
   EXPECT_EQ(q.obs[1].px.x(), 200.0);  // the noisy copy (sigma 80) scored lowest
   EXPECT_EQ(q.obs[2].px.x(), 250.0);
+
+  // Many additions with the default limit: the vector never holds more than max_observations + 1.
+  VisualMap defaults;
+  VisualPoint r = pointWithObservation(textureAt(100, 100, 5), Vec2(100, 100));
+  for (int i = 1; i < 40; ++i) {
+    const Vec2 px(100.0 + 50.0 * (i % 9), 100.0 + 50.0 * (i / 9));
+    ASSERT_TRUE(defaults.addObservation(r, textureAt(px.x(), px.y(), 5, 3.0, unsigned(i)), Pose::Identity(), px, 1.f, i));
+    EXPECT_LE(r.obs.size(), std::size_t(defaults.config().max_observations));
+    EXPECT_LE(r.obs.capacity(), std::size_t(defaults.config().max_observations) + 1);
+  }
 }
 
 TEST(VisualReference, PicksObservationAgreeingBestWithOthers) {

@@ -52,6 +52,12 @@ bool VisualMap::addObservation(VisualPoint& p, const Image& gray, const Pose& T_
   o.T_world_camera = T_world_camera;
   o.px = px;
   o.inv_exposure = inv_exposure;
+  // Grow by doubling but never beyond max_observations + 1 (the new one before a drop): a full point
+  // must not sit on a vector of twice the size it can use.
+  if (p.obs.size() == p.obs.capacity()) {
+    const std::size_t cap_limit = std::size_t(config_.max_observations) + 1;
+    p.obs.reserve(std::max(p.obs.size() + 1, std::min(2 * p.obs.size(), cap_limit)));
+  }
   p.obs.push_back(o);
   if (p.reference < 0 || p.reference >= int(p.obs.size())) p.reference = int(p.obs.size()) - 1;
 
