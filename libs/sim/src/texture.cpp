@@ -77,6 +77,24 @@ inline double noise2(double x, double y, std::uint64_t seed) {
   return p + v * (q - p);
 }
 
+// Shade offset of the rectangle pattern at (x, y) (see noiseAlbedo).
+double rectangles(double x, double y, double fp, double cell, std::uint64_t seed) {
+  const double cx = std::floor(x / cell), cy = std::floor(y / cell);
+  const std::uint64_t h = mix64(seed ^ (static_cast<std::uint64_t>(static_cast<std::int64_t>(cx)) * 0x9E3779B97F4A7C15ull) ^
+                                (static_cast<std::uint64_t>(static_cast<std::int64_t>(cy)) * 0xC2B2AE3D27D4EB4Full));
+  if ((h & 0xFF) >= 102) return 0.0;  // 40% of the cells
+  auto unit = [&](int k) { return static_cast<double>((h >> (8 + 10 * k)) & 1023u) / 1023.0; };
+  const double x0 = 0.05 + 0.4 * unit(0), x1 = x0 + 0.2 + 0.35 * unit(1);
+  const double y0 = 0.05 + 0.4 * unit(2), y1 = y0 + 0.2 + 0.35 * unit(3);
+  const double shade = (unit(4) < 0.5 ? -1.0 : 1.0) * (0.15 + 0.2 * unit(5));
+  const double w = fp / cell;  // edge half-width in cell units
+  if (w > 0.25) return shade * (x1 - x0) * (y1 - y0) * 0.4;  // mean over cells
+  const double u = x / cell - cx, v = y / cell - cy;
+  const double inside = smoothstep(x0 - w, x0 + w, u) * (1.0 - smoothstep(x1 - w, x1 + w, u)) *
+                        smoothstep(y0 - w, y0 + w, v) * (1.0 - smoothstep(y1 - w, y1 + w, v));
+  return shade * inside;
+}
+
 }  // namespace
 
 double gradientNoise(double x, double y, std::uint64_t seed) { return noise2(x, y, seed); }
@@ -125,7 +143,7 @@ double TextureBank::noiseAlbedo(const SurfaceStyle& s, double u, double v, doubl
   const double x = s.cos_a * u - s.sin_a * v + s.offset_u;
   const double y = s.sin_a * u + s.cos_a * v + s.offset_v;
 
-  // Fractal noise: octave k has wavelength scale / 2^k and amplitude 0.6^k (close to the 1/f spectrum
+  // Fractal noise: octave k has wavelength scale / 2^k and amplitude 0.65^k (close to the 1/f spectrum
   // of natural images); each octave is rotated so that lattice directions do not line up.
   double fbm = 0.0, amp = 1.0, lambda = scale_m_;
   const auto& rot = tables().octave_rot;
@@ -135,7 +153,7 @@ double TextureBank::noiseAlbedo(const SurfaceStyle& s, double u, double v, doubl
     const double inv = 1.0 / lambda;
     const double c = rot[k][0] * inv, sn = rot[k][1] * inv;
     fbm += w * amp * noise2(c * x - sn * y, sn * x + c * y, s.noise_seed + 977 * k);
-    amp *= 0.6;
+    amp *= 0.65;
     lambda *= 0.5;
   }
 
@@ -152,7 +170,12 @@ double TextureBank::noiseAlbedo(const SurfaceStyle& s, double u, double v, doubl
   const double ws = std::max(0.01, 1.5 * fp * spot_inv);
   const double spot = ws < 0.5 ? smoothstep(-ws, ws, noise2(x * spot_inv, y * spot_inv, s.noise_seed + 5003) - 0.3) : 0.1;
 
-  const double a = s.base + s.contrast * (0.45 * fbm + 0.28 * (region - 0.5) - 0.22 * spot);
+  // Rectangles with straight edges and corners (posters, panels, tiles): in a grid of cells of
+  // 0.6 scale, 40% of the cells hold a rectangle of random extent and shade. Edges are smoothed over
+  // the footprint; once the footprint reaches a quarter cell the rectangle fades to its mean.
+  const double rect = rectangles(x, y, fp, 0.6 * scale_m_, s.noise_seed + 7919);
+
+  const double a = s.base + s.contrast * (0.45 * fbm + 0.28 * (region - 0.5) - 0.22 * spot + rect);
   return std::clamp(a, 0.03, 0.97);
 }
 

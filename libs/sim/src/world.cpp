@@ -345,7 +345,7 @@ double World::albedoAt(int surface, double u, double v, double footprint_m) cons
 
 double World::radiance(const Hit& h) const {
   static const Vec3 light = Vec3(0.35, 0.25, 0.9).normalized();
-  return h.albedo * (0.55 + 0.45 * std::max(0.0, h.normal.dot(light)));
+  return h.albedo * (0.65 + 0.35 * std::max(0.0, h.normal.dot(light)));
 }
 
 double World::skyRadiance(const Vec3& dir) { return 0.75 + 0.2 * std::clamp(dir.z(), -1.0, 1.0); }

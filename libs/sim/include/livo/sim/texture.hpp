@@ -1,7 +1,8 @@
 // Surface textures of the simulated world: albedo in [0, 1] as a function of surface coordinates.
 //
 // - noise: procedural and natural-image-like: fractal gradient noise with a 1/f amplitude spectrum,
-//   plus large blobs with sharp edges and small dark spots. Octaves finer than about two footprints
+//   plus large blobs with sharp edges, small dark spots and scattered rectangles (straight edges and
+//   corners). Octaves finer than about two footprints
 //   are faded out, and edges are widened to the footprint, so that a ray per pixel does not alias.
 // - images: photos tiled (mirrored) over the surface, sampled trilinearly from a mip pyramid chosen
 //   by the footprint.

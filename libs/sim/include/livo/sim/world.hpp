@@ -56,7 +56,7 @@ class World {
   /// Unsigned distance from a point to the nearest surface (brute force, test oracle).
   double distanceToSurface(const Vec3& p) const;
 
-  /// Camera radiance of a hit (view-independent, 0..1): albedo * (ambient + diffuse * max(0, n.l)).
+  /// Camera radiance of a hit (view-independent, 0..1): albedo * (0.65 + 0.35 max(0, n.l)), l fixed.
   double radiance(const Hit& h) const;
   /// Radiance of rays that leave the world.
   static double skyRadiance(const Vec3& dir);
