@@ -51,6 +51,12 @@ class LioOdometry {
   /// Processes one frame in time order. Frames before the IMU is initialised only feed it.
   LioFrameResult process(const Frame& frame);
 
+  /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
+  void setState(const NavState& x, const StateCov& P) {
+    x_ = x;
+    P_ = P;
+  }
+  const LioOdometryConfig& config() const { return cfg_; }
   const VoxelMap& map() const { return map_; }
   VoxelMap& map() { return map_; }
   const NavState& state() const { return x_; }

@@ -2,13 +2,18 @@
 // sensor data in (IMU, LiDAR scans, images), frame results out.
 //
 // Per frame: (1) recut the LiDAR stream at the image time with the IMU samples covering the sweep
-// (Recombiner), (2) propagate the IMU, undistort and run the iterated LiDAR update (LioOdometry),
-// (3) degeneracy check of the matched plane normals, (4) map update.
+// (Recombiner), (2) propagate the IMU, undistort, run the iterated LiDAR update and insert the scan into
+// the voxel map (LioOdometry), (3) degeneracy check of the matched plane normals, (4) frame selection,
+// (5) on selected images the photometric update and (6) the visual map update.
 #pragma once
 
 #include "livo/common/config.hpp"
 #include "livo/estimation/lio_odometry.hpp"
+#include "livo/estimation/frame_selector.hpp"
 #include "livo/estimation/selector_config.hpp"
+#include "livo/estimation/vio_update.hpp"
+#include "livo/map/visual_map.hpp"
+#include "livo/sensors/camera_model.hpp"
 #include "livo/sensors/camera_config.hpp"
 #include "livo/sensors/recombiner.hpp"
 
@@ -22,6 +27,8 @@ struct PipelineConfig {
   LioOdometryConfig lio;
   CameraConfig camera;
   SelectorConfig selector;
+  VioConfig vio;
+  VisualMapConfig visual_map;
   std::string visual_mode = "adaptive";  ///< adaptive | all | off (command line)
   std::string map_mode = "hybrid";       ///< hybrid | global (command line)
 
@@ -34,7 +41,9 @@ struct FrameResult {
   double total_ms = 0.0;
   bool degenerate = false;     ///< sigma_min below the threshold for degenerate_frames frames in a row
   bool visual_used = false;
-  int n_visual_points = 0;
+  int n_visual_points = 0;     ///< visual points used by the update
+  int n_new_visual_points = 0; ///< created this frame
+  double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
   double vio_ms = 0.0;
 };
 
@@ -54,15 +63,23 @@ class Pipeline {
 
   const Recombiner& recombiner() const { return recombiner_; }
   const LioOdometry& odometry() const { return odometry_; }
+  const VisualMap& visualMap() const { return visual_map_; }
+  /// Images whose size does not match the camera calibration (skipped by the visual update).
+  std::size_t imagesWrongSize() const { return images_wrong_size_; }
   const PipelineConfig& config() const { return cfg_; }
   std::size_t framesProcessed() const { return frames_; }
 
  private:
   FrameResult processFrame(const Frame& frame);
+  void visualStep(const Frame& frame, FrameResult& r);
 
   PipelineConfig cfg_;
   Recombiner recombiner_;
   LioOdometry odometry_;
+  std::unique_ptr<CameraModel> camera_;  ///< null without a camera
+  VisualMap visual_map_;
+  FrameSelector selector_;
+  std::size_t images_wrong_size_ = 0;
   int low_sigma_run_ = 0;  ///< consecutive frames with sigma_min below the threshold
   std::size_t frames_ = 0;
 };
