@@ -1,6 +1,6 @@
 // End-to-end on the simulator, in one process (the same Pipeline livo-run uses): short seeded runs of
-// the shipped scenarios against the simulator's ground truth, plus undistortion with the true IMU.
-// LiDAR-inertial only here (camera frames are not rendered); the visual update has its own tests.
+// the shipped scenarios against the simulator's ground truth (LiDAR-inertial, and with the visual update
+// in the adaptive and all modes), plus undistortion with the true IMU.
 // livo-test-deps: livo_sim livo_estimation livo_eval livo_io
 #include "livo/estimation/pipeline.hpp"
 #include "livo/estimation/undistort.hpp"
@@ -24,14 +24,14 @@ std::string scenarioPath(const std::string& name) { return std::string(LIVO_SOUR
 struct RunSummary {
   Trajectory est, gt;
   EvalResult eval;
-  std::size_t frames = 0, degenerate_frames = 0, lio_ok_frames = 0;
+  std::size_t frames = 0, degenerate_frames = 0, lio_ok_frames = 0, images = 0, visual_frames = 0;
   double mean_sigma_min = 0.0;
   double median_lio_ms = 0.0;
 };
 
-/// Simulates `scenario` for `duration_s` and runs the LiDAR-inertial pipeline on it with the rig
-/// config the simulator writes (as livo-sim --rig does).
-RunSummary runScenario(sim::SimScenario sc, double duration_s) {
+/// Simulates `scenario` for `duration_s` and runs the pipeline on it with the rig config the simulator
+/// writes (as livo-sim --rig does). visual_mode "off" skips rendering: one frame per scan.
+RunSummary runScenario(sim::SimScenario sc, double duration_s, const std::string& visual_mode = "off") {
   sc.duration_s = duration_s;
   sim::Simulator simulator(sc);
   std::ostringstream rig;
@@ -40,8 +40,9 @@ RunSummary runScenario(sim::SimScenario sc, double duration_s) {
   PipelineConfig cfg;
   cfg.load(file.root());
   file.checkAllKeysUsed();
-  cfg.preprocess.camera_enabled = false;  // LiDAR-inertial: one frame per scan
-  cfg.visual_mode = "off";
+  const bool camera = visual_mode != "off";
+  if (!camera) cfg.preprocess.camera_enabled = false;  // LiDAR-inertial: one frame per scan
+  cfg.visual_mode = visual_mode;
   Pipeline pipeline(cfg);
 
   RunSummary out;
@@ -53,6 +54,8 @@ RunSummary runScenario(sim::SimScenario sc, double duration_s) {
     out.est.push_back({toSeconds(f.utime), r.lio.state.pose()});
     out.degenerate_frames += r.degenerate;
     out.lio_ok_frames += r.lio.lio_ok;
+    out.images += f.has_image;
+    out.visual_frames += r.visual_used;
     sigma_sum += r.lio.sigma_min;
     lio_ms.push_back(r.lio.lio_ms);
   };
@@ -66,6 +69,12 @@ RunSummary runScenario(sim::SimScenario sc, double duration_s) {
     pipeline.addScan(s);
     pipeline.processReady(onFrame);
   };
+  if (camera) {
+    cb.image = [&](const Image& img, const sim::ImageTruth&) {
+      pipeline.addImage(img);
+      pipeline.processReady(onFrame);
+    };
+  }
   simulator.run(cb);
   pipeline.flush();
   pipeline.processReady(onFrame);
@@ -74,9 +83,10 @@ RunSummary runScenario(sim::SimScenario sc, double duration_s) {
     out.mean_sigma_min = sigma_sum / double(out.est.size());
     out.median_lio_ms = summarize(lio_ms).median;
   }
-  std::cout << sc.world.kind << " " << duration_s << " s: " << out.frames << " frames, ATE " << out.eval.ate.translation_m.rmse * 100
+  std::cout << sc.world.kind << " " << visual_mode << " " << duration_s << " s: " << out.frames << " frames, ATE " << out.eval.ate.translation_m.rmse * 100
             << " cm over " << out.eval.path_length_m << " m, degenerate " << out.degenerate_frames << ", LIO ok "
-            << out.lio_ok_frames << ", mean sigma_min " << out.mean_sigma_min << ", median LIO " << out.median_lio_ms << " ms\n";
+            << out.lio_ok_frames << ", mean sigma_min " << out.mean_sigma_min << ", median LIO " << out.median_lio_ms << " ms, visual " << out.visual_frames << "/" << out.images
+            << " images\n";
   return out;
 }
 
@@ -106,6 +116,30 @@ TEST(Pipeline, CorridorIsLidarDegenerate) {
   ASSERT_GT(r.est.size(), 100u);
   EXPECT_GT(r.degenerate_frames, r.est.size() / 2);
   EXPECT_LT(r.mean_sigma_min, 0.07);
+}
+
+// The corridor's LiDAR degeneracy is what the visual update fixes: adaptive mode runs it on the
+// degenerate frames and brings the error down to the centimetre level.
+TEST(Pipeline, CorridorAdaptiveVisualFixesDegeneracy) {
+  const sim::SimScenario sc = sim::loadScenarioFile(scenarioPath("corridor"));
+  const RunSummary off = runScenario(sc, 20.0, "off");
+  const RunSummary adaptive = runScenario(sc, 20.0, "adaptive");
+  ASSERT_GT(adaptive.est.size(), 150u);
+  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, off.eval.ate.translation_m.rmse / 3.0);
+  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, 0.10);
+  EXPECT_GT(adaptive.visual_frames, adaptive.images / 2) << "degenerate frames run the visual update";
+}
+
+// In a well-conditioned room the adaptive selector runs the visual update on few images, at no cost in
+// accuracy against running it on every image.
+TEST(Pipeline, RoomAdaptiveUsesFewImagesAtTheAccuracyOfAll) {
+  const sim::SimScenario sc = sim::loadScenarioFile(scenarioPath("room"));
+  const RunSummary all = runScenario(sc, 25.0, "all");
+  const RunSummary adaptive = runScenario(sc, 25.0, "adaptive");
+  ASSERT_GT(adaptive.images, 200u);
+  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, all.eval.ate.translation_m.rmse + 0.01);
+  EXPECT_GT(all.visual_frames, all.images * 9 / 10);
+  EXPECT_LE(double(adaptive.visual_frames), 0.3 * double(adaptive.images));
 }
 
 // A sweep under fast rotation, undistorted with the true (noise-free) IMU from the true initial
