@@ -407,6 +407,19 @@ TEST(Degeneracy, SigmaMinOfPlaneFamilies) {
   }
   EXPECT_NEAR(degeneracySigmaMin(corridor), 0.0, 1e-12);
   EXPECT_EQ(degeneracySigmaMin({}), 0.0);
+  // Unequal families: 10 % of the normals along x, 30 % along y, 60 % along z -> sqrt(0.1).
+  std::vector<Vec3> mixed;
+  for (int i = 0; i < 10; ++i) {
+    mixed.push_back(Vec3::UnitX());
+    for (int k = 0; k < 3; ++k) mixed.push_back(-Vec3::UnitY());
+    for (int k = 0; k < 6; ++k) mixed.push_back(Vec3::UnitZ());
+  }
+  EXPECT_NEAR(degeneracySigmaMin(mixed), std::sqrt(0.1), 1e-12);
+  // Invariant to the normals' signs and to a rotation of the scene.
+  const Mat3 R = expSO3(Vec3(0.3, -1.1, 0.7));
+  std::vector<Vec3> rotated;
+  for (std::size_t i = 0; i < mixed.size(); ++i) rotated.push_back((i % 2 ? -1.0 : 1.0) * (R * mixed[i]));
+  EXPECT_NEAR(degeneracySigmaMin(rotated), std::sqrt(0.1), 1e-9);
 }
 
 // Real LiDAR: each KITTI sequence 07 scan registered to a map of the previous ones (stored poses),

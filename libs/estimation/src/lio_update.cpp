@@ -122,8 +122,8 @@ double degeneracySigmaMin(const std::vector<Vec3>& normals) {
   Mat3 M = Mat3::Zero();
   for (const auto& n : normals) M += n * n.transpose();
   const Vec3 lambda = Eigen::SelfAdjointEigenSolver<Mat3>(M, Eigen::EigenvaluesOnly).eigenvalues();
-  const double norm = lambda.norm();
-  return norm > 0 ? std::max(0.0, lambda.minCoeff()) / norm : 0.0;
+  // Unit normals: trace(M) = N, so lambda_min / N is the share of the weakest direction.
+  return std::sqrt(std::max(0.0, lambda.minCoeff()) / double(normals.size()));
 }
 
 }  // namespace livo

@@ -61,9 +61,13 @@ Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint&
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const VoxelMap& map,
                             const LioConfig& cfg);
 
-/// Degeneracy metric (ALGORITHMS.md, top): eigenvalues lambda of M = sum n n^T normalised by their L2
-/// norm; returns the smallest, in [0, 1/sqrt(3)] (0 for no normals). This project reads the paper's
-/// "Normalize" as lambda / ||lambda||_2.
+/// Degeneracy metric (ALGORITHMS.md, top and section 9): with M = sum n n^T over the N matched unit
+/// normals (trace N) and lambda_min its smallest eigenvalue, sigma_min = sqrt(lambda_min / N), in
+/// [0, 1/sqrt(3)] (1/sqrt(3) for three equally represented orthogonal plane families, 0 for parallel
+/// planes; 0 for no normals). The paper's "normalize" admits two readings with this range; this one was
+/// chosen on the simulator: the L2 reading (lambda_min / ||lambda||) flagged 96 of 601 frames of the
+/// furnished room (60 s) against 55 here, while both keep every corridor and wall frame below 0.07
+/// (corridor mean 0.011, wall 0.012, room 0.33 with this reading).
 double degeneracySigmaMin(const std::vector<Vec3>& normals);
 
 }  // namespace livo
