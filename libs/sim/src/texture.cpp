@@ -47,9 +47,9 @@ inline double smoothstep(double e0, double e1, double x) {
   return t * t * (3.0 - 2.0 * t);
 }
 
-// Weight of a feature of wavelength `lambda` seen with footprint `fp`: 1 above 4 footprints, fading to
+// Weight of a feature of wavelength `lambda` seen with footprint `fp`: 1 above 3 footprints, fading to
 // 0 at 2 footprints (Nyquist: a feature needs two samples per wavelength).
-inline double octaveWeight(double lambda, double fp) { return std::clamp(0.5 * (lambda / fp - 2.0), 0.0, 1.0); }
+inline double octaveWeight(double lambda, double fp) { return std::clamp(lambda / fp - 2.0, 0.0, 1.0); }
 
 }  // namespace
 
