@@ -396,6 +396,8 @@ TEST(Degeneracy, SigmaMinOfPlaneFamilies) {
     n.push_back(-Vec3::UnitZ());
   }
   EXPECT_NEAR(degeneracySigmaMin(n), 1.0 / std::sqrt(3.0), 1e-12);
+  // The selector's factor sqrt(3) sigma_min maps this best case to 1 (thresholds = tau_predef).
+  EXPECT_NEAR(std::sqrt(3.0) * degeneracySigmaMin(n), 1.0, 1e-12);
   // Parallel planes (a corridor floor seen alone, or one wall): degenerate.
   std::vector<Vec3> wall(200, Vec3::UnitX());
   EXPECT_NEAR(degeneracySigmaMin(wall), 0.0, 1e-12);

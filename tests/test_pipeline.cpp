@@ -125,6 +125,15 @@ TEST(Pipeline, CorridorIsDegenerateAndAdaptiveVisualFixesIt) {
   EXPECT_GT(adaptive.visual_frames, adaptive.images / 2) << "degenerate frames run the visual update";
 }
 
+// Facing one large wall, the LiDAR constrains only the wall's normal (and the floor's, when seen):
+// the frames are flagged degenerate.
+TEST(Pipeline, WallIsLidarDegenerate) {
+  const RunSummary r = runScenario(sim::loadScenarioFile(scenarioPath("wall")), 15.0);
+  ASSERT_GT(r.est.size(), 100u);
+  EXPECT_GT(r.degenerate_frames, r.est.size() * 8 / 10);
+  EXPECT_LT(r.mean_sigma_min, 0.07);
+}
+
 // In a well-conditioned room the adaptive selector runs the visual update on few images, at no cost in
 // accuracy against running it on every image.
 TEST(Pipeline, RoomAdaptiveUsesFewImagesAtTheAccuracyOfAll) {

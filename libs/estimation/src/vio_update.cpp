@@ -73,35 +73,65 @@ Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& re
   return A;
 }
 
+namespace {
+
+/// The point's projection at state x, shared by all pixels of its patch: computed once per point and
+/// linearisation instead of once per pixel.
+struct PointProjection {
+  Vec3 p_i = Vec3::Zero();
+  Vec2 px = Vec2::Zero();
+  Eigen::Matrix<double, 2, 3> J_theta = Eigen::Matrix<double, 2, 3>::Zero();  // d px / d dtheta
+  Eigen::Matrix<double, 2, 3> J_pos = Eigen::Matrix<double, 2, 3>::Zero();    // d px / d dp
+};
+
+bool projectForPatch(const NavState& x, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w,
+                     bool with_jacobian, PointProjection& out) {
+  Vec3 p_c;
+  Eigen::Matrix<double, 2, 3> J;
+  if (!projectPoint(x, T_imu_camera, cam, p_w, out.p_i, p_c, out.px, with_jacobian ? &J : nullptr)) return false;
+  if (with_jacobian) {
+    const Mat3 R_ci = T_imu_camera.linear().transpose();
+    out.J_theta = J * R_ci * hat(out.p_i);                          // p_i -> p_i + [p_i]x dtheta
+    out.J_pos = -J * R_ci * x.R_world_imu.transpose();              // p_i -> p_i - R^T dp
+  }
+  return true;
+}
+
+/// Residual of one patch pixel given the point's projection (see photometricResidual).
+bool pixelResidual(const NavState& x, const Image& gray, const VisualObservation& ref, const Eigen::Matrix2d& A,
+                   const PointProjection& pp, int level, int row, int col, bool with_jacobian, double& r,
+                   Eigen::Matrix<double, 1, 7>* H) {
+  const double stride = double(1 << level);
+  const Vec2 o(patchOffset(col), patchOffset(row));  // level units
+  const Vec2 u = pp.px + o * stride;
+  float I = 0, P_ref = 0;
+  const Vec2 d_ref = A * o;  // the same displacement in the reference, level units
+  if (!ref.patch.sample(level, d_ref.x(), d_ref.y(), P_ref)) return false;
+  if (!sampleBilinear(gray, u.x(), u.y(), I)) return false;
+  r = x.inv_exposure * I - double(ref.inv_exposure) * P_ref;
+  if (with_jacobian) {
+    float Ixp = 0, Ixm = 0, Iyp = 0, Iym = 0;
+    if (!sampleBilinear(gray, u.x() + stride, u.y(), Ixp) || !sampleBilinear(gray, u.x() - stride, u.y(), Ixm) ||
+        !sampleBilinear(gray, u.x(), u.y() + stride, Iyp) || !sampleBilinear(gray, u.x(), u.y() - stride, Iym))
+      return false;
+    const Eigen::RowVector2d g = x.inv_exposure * Eigen::RowVector2d((Ixp - Ixm) / (2 * stride), (Iyp - Iym) / (2 * stride));
+    H->segment<3>(0) = g * pp.J_theta;
+    H->segment<3>(3) = g * pp.J_pos;
+    (*H)(6) = I;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
                          const VisualPoint& p, const Eigen::Matrix2d& A, int level, int row, int col, double& r,
                          Row7* H) {
   const VisualObservation* ref = p.referenceObs();
   if (!ref) return false;
-  Vec3 p_i, p_c;
-  Vec2 px;
-  Eigen::Matrix<double, 2, 3> J;
-  if (!projectPoint(x, T_imu_camera, cam, p.p_world, p_i, p_c, px, H ? &J : nullptr)) return false;
-  const double stride = double(1 << level);
-  const Vec2 o(patchOffset(col), patchOffset(row));  // level units
-  const Vec2 u = px + o * stride;
-  float I = 0, Ixp = 0, Ixm = 0, Iyp = 0, Iym = 0, P_ref = 0;
-  const Vec2 d_ref = A * o;  // the same displacement in the reference, level units
-  if (!ref->patch.sample(level, d_ref.x(), d_ref.y(), P_ref)) return false;
-  if (!sampleBilinear(gray, u.x(), u.y(), I)) return false;
-  r = x.inv_exposure * I - double(ref->inv_exposure) * P_ref;
-  if (H) {
-    if (!sampleBilinear(gray, u.x() + stride, u.y(), Ixp) || !sampleBilinear(gray, u.x() - stride, u.y(), Ixm) ||
-        !sampleBilinear(gray, u.x(), u.y() + stride, Iyp) || !sampleBilinear(gray, u.x(), u.y() - stride, Iym))
-      return false;
-    const Eigen::RowVector2d g((Ixp - Ixm) / (2 * stride), (Iyp - Iym) / (2 * stride));
-    const Eigen::RowVector3d dr_dpc = x.inv_exposure * g * J;
-    const Mat3 R_ci = T_imu_camera.linear().transpose();
-    H->segment<3>(0) = dr_dpc * R_ci * hat(p_i);                        // d/d dtheta
-    H->segment<3>(3) = -dr_dpc * R_ci * x.R_world_imu.transpose();      // d/d dp
-    (*H)(6) = I;                                                        // d/d dtau
-  }
-  return true;
+  PointProjection pp;
+  if (!projectForPatch(x, T_imu_camera, cam, p.p_world, H != nullptr, pp)) return false;
+  return pixelResidual(x, gray, *ref, A, pp, level, row, col, H != nullptr, r, H);
 }
 
 namespace {
@@ -113,10 +143,12 @@ double pointRms(const NavState& x, const Image& gray, const CameraModel& cam, co
                 int level) {
   double sq = 0;
   int n = 0;
+  PointProjection pp;
+  if (!projectForPatch(x, T_ic, cam, ps.point->p_world, false, pp)) return -1.0;
   for (int row = 0; row < kN; ++row)
     for (int col = 0; col < kN; ++col) {
       double r;
-      if (!photometricResidual(x, gray, cam, T_ic, *ps.point, ps.A, level, row, col, r, nullptr)) continue;
+      if (!pixelResidual(x, gray, *ps.ref, ps.A, pp, level, row, col, false, r, nullptr)) continue;
       sq += r * r;
       ++n;
     }
@@ -129,10 +161,12 @@ Linearization linearize(const NavState& x, const Image& gray, const CameraModel&
   Row7 H;
   for (const auto& ps : pts) {
     if (!ps.used) continue;
+    PointProjection pp;
+    if (!projectForPatch(x, T_ic, cam, ps.point->p_world, true, pp)) continue;
     for (int row = 0; row < kN; ++row)
       for (int col = 0; col < kN; ++col) {
         double r;
-        if (!photometricResidual(x, gray, cam, T_ic, *ps.point, ps.A, level, row, col, r, &H)) continue;
+        if (!pixelResidual(x, gray, *ps.ref, ps.A, pp, level, row, col, true, r, &H)) continue;
         if (!exposure) H(6) = 0.0;
         lin.HtRH.noalias() += H.transpose() * H * inv_var;
         lin.HtRz.noalias() += H.transpose() * r * inv_var;
