@@ -360,9 +360,11 @@ TEST(SimLidar, BlindMaxRangeAndGrazingReturnsAreDropped) {
 // ---------------------------------------------------------------- camera
 
 TEST(SimCamera, PixelsShowTheSurfaceTheirRaysHit) {
-  for (const std::string model : {"pinhole", "equidistant"}) {
-    SCOPED_TRACE(model);
-    SimScenario sc = makeScenario("room");
+  for (const std::string world_model : {"room/pinhole", "room/equidistant", "street/pinhole"}) {
+    SCOPED_TRACE(world_model);
+    const std::string world = world_model.substr(0, world_model.find('/'));
+    const std::string model = world_model.substr(world_model.find('/') + 1);
+    SimScenario sc = makeScenario(world, world == "street" ? "spinning32" : "avia");
     sc.camera.model = model;
     sc.camera.distortion = model == "pinhole" ? std::vector<double>{-0.2, 0.05, 0.001, -0.002}
                                               : std::vector<double>{0.02, -0.01, 0.003, -0.001};
@@ -377,6 +379,7 @@ TEST(SimCamera, PixelsShowTheSurfaceTheirRaysHit) {
     ImageTruth truth;
     const Image img = sim.renderImage(28, &truth);  // t = 2.837 s, moving
     ASSERT_EQ(img.utime, sim.startUtime() + 2'837'000);
+    std::size_t sky = 0;
     EXPECT_TRUE(truth.T_world_camera.isApprox(sim.T_world_camera(img.utime), 1e-12));
     const SimCameraModel& cam = sim.camera();
     std::size_t invalid = 0;
@@ -393,16 +396,21 @@ TEST(SimCamera, PixelsShowTheSurfaceTheirRaysHit) {
         ASSERT_LT((ray - cam.rays()[i].cast<double>()).norm(), 1e-6);
         const Vec3 dir = truth.T_world_camera.linear() * cam.rays()[i].cast<double>();
         const Hit hit = sim.world().raycastBruteForce(truth.T_world_camera.translation(), dir, 2000.0, cam.pixelAngle()[i]);
-        ASSERT_TRUE(hit.valid);  // closed room
-        ASSERT_LT(sim.world().distanceToSurface(hit.point), 1e-9);
-        Eigen::Vector2d uv;
-        ASSERT_TRUE(cam.project(truth.T_world_camera.inverse() * hit.point, uv));
-        ASSERT_LT((uv - Eigen::Vector2d(c, r)).norm(), 1e-5);
-        const long expected = std::clamp(std::lround(kGrayPerRadiance * truth.gain * sim.world().radiance(hit)), 0L, 255L);
+        ASSERT_TRUE(hit.valid || world == "street");  // the room is closed; the street has a sky
+        double radiance = World::skyRadiance(dir);
+        sky += !hit.valid;
+        if (hit.valid) {
+          ASSERT_LT(sim.world().distanceToSurface(hit.point), 1e-9 * (1.0 + hit.distance));
+          Eigen::Vector2d uv;
+          ASSERT_TRUE(cam.project(truth.T_world_camera.inverse() * hit.point, uv));
+          ASSERT_LT((uv - Eigen::Vector2d(c, r)).norm(), 1e-5);
+          radiance = sim.world().radiance(hit);
+        }
+        const long expected = std::clamp(std::lround(kGrayPerRadiance * truth.gain * radiance), 0L, 255L);
         ASSERT_EQ(img.data[i], expected) << "pixel " << c << "," << r;
       }
-    if (model == "equidistant") EXPECT_GT(invalid, 100u);  // corners beyond 90 deg
-    else EXPECT_EQ(invalid, 0u);
+    EXPECT_EQ(invalid > 100u, model == "equidistant");  // fisheye corners lie beyond 90 deg
+    EXPECT_EQ(sky > 50u, world == "street");
   }
 }
 

@@ -42,14 +42,15 @@ inline std::int64_t fastFloor(double x) {
 
 inline double fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
 
-inline double smoothstep(double e0, double e1, double x) {
-  const double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
+// Smoothstep from e0 to e0 + 1 / inv_width (the caller precomputes the inverse width: no division).
+inline double smoothRamp(double x, double e0, double inv_width) {
+  const double t = std::clamp((x - e0) * inv_width, 0.0, 1.0);
   return t * t * (3.0 - 2.0 * t);
 }
 
-// Weight of a feature of wavelength `lambda` seen with footprint `fp`: 1 above 3 footprints, fading to
-// 0 at 2 footprints (Nyquist: a feature needs two samples per wavelength).
-inline double octaveWeight(double lambda, double fp) { return std::clamp(lambda / fp - 2.0, 0.0, 1.0); }
+// Weight of a feature of wavelength `lambda` seen with footprint 1 / inv_fp: 1 above 3 footprints,
+// fading to 0 at 2 footprints (Nyquist: a feature needs two samples per wavelength).
+inline double octaveWeight(double lambda, double inv_fp) { return std::clamp(lambda * inv_fp - 2.0, 0.0, 1.0); }
 
 }  // namespace
 
@@ -77,21 +78,23 @@ inline double noise2(double x, double y, std::uint64_t seed) {
   return p + v * (q - p);
 }
 
-// Shade offset of the rectangle pattern at (x, y) (see noiseAlbedo).
-double rectangles(double x, double y, double fp, double cell, std::uint64_t seed) {
-  const double cx = std::floor(x / cell), cy = std::floor(y / cell);
-  const std::uint64_t h = mix64(seed ^ (static_cast<std::uint64_t>(static_cast<std::int64_t>(cx)) * 0x9E3779B97F4A7C15ull) ^
-                                (static_cast<std::uint64_t>(static_cast<std::int64_t>(cy)) * 0xC2B2AE3D27D4EB4Full));
+// Shade offset of the rectangle pattern at (x, y) (see noiseAlbedo); inv_cell = 1 / cell size.
+double rectangles(double x, double y, double fp, double inv_cell, std::uint64_t seed) {
+  const double xs = x * inv_cell, ys = y * inv_cell;
+  const std::int64_t cx = fastFloor(xs), cy = fastFloor(ys);
+  const std::uint64_t h = mix64(seed ^ (static_cast<std::uint64_t>(cx) * 0x9E3779B97F4A7C15ull) ^
+                                (static_cast<std::uint64_t>(cy) * 0xC2B2AE3D27D4EB4Full));
   if ((h & 0xFF) >= 102) return 0.0;  // 40% of the cells
-  auto unit = [&](int k) { return static_cast<double>((h >> (8 + 10 * k)) & 1023u) / 1023.0; };
+  auto unit = [&](int k) { return static_cast<double>((h >> (8 + 10 * k)) & 1023u) * (1.0 / 1023.0); };
   const double x0 = 0.05 + 0.4 * unit(0), x1 = x0 + 0.2 + 0.35 * unit(1);
   const double y0 = 0.05 + 0.4 * unit(2), y1 = y0 + 0.2 + 0.35 * unit(3);
   const double shade = (unit(4) < 0.5 ? -1.0 : 1.0) * (0.15 + 0.2 * unit(5));
-  const double w = fp / cell;  // edge half-width in cell units
+  const double w = std::max(fp * inv_cell, 1e-4);  // edge half-width in cell units
   if (w > 0.25) return shade * (x1 - x0) * (y1 - y0) * 0.4;  // mean over cells
-  const double u = x / cell - cx, v = y / cell - cy;
-  const double inside = smoothstep(x0 - w, x0 + w, u) * (1.0 - smoothstep(x1 - w, x1 + w, u)) *
-                        smoothstep(y0 - w, y0 + w, v) * (1.0 - smoothstep(y1 - w, y1 + w, v));
+  const double u = xs - static_cast<double>(cx), v = ys - static_cast<double>(cy);
+  const double iw = 0.5 / w;
+  const double inside = smoothRamp(u, x0 - w, iw) * (1.0 - smoothRamp(u, x1 - w, iw)) * smoothRamp(v, y0 - w, iw) *
+                        (1.0 - smoothRamp(v, y1 - w, iw));
   return shade * inside;
 }
 
@@ -100,7 +103,12 @@ double rectangles(double x, double y, double fp, double cell, std::uint64_t seed
 double gradientNoise(double x, double y, std::uint64_t seed) { return noise2(x, y, seed); }
 
 TextureBank::TextureBank(TextureKind kind, const std::vector<std::string>& image_paths, double scale_m, double tile_m)
-    : kind_(kind), scale_m_(scale_m), tile_m_(tile_m) {
+    : kind_(kind),
+      scale_m_(scale_m),
+      tile_m_(tile_m),
+      inv_blob_cell_(1.0 / (0.8 * scale_m)),
+      inv_spot_cell_(1.0 / (0.15 * scale_m)),
+      inv_rect_cell_(1.0 / (0.6 * scale_m)) {
   if (kind_ != TextureKind::Images) return;
   for (const auto& path : image_paths) {
     const cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
@@ -145,35 +153,37 @@ double TextureBank::noiseAlbedo(const SurfaceStyle& s, double u, double v, doubl
 
   // Fractal noise: octave k has wavelength scale / 2^k and amplitude 0.65^k (close to the 1/f spectrum
   // of natural images); each octave is rotated so that lattice directions do not line up.
-  double fbm = 0.0, amp = 1.0, lambda = scale_m_;
+  const double inv_fp = 1.0 / fp;
+  double fbm = 0.0, amp = 1.0, lambda = scale_m_, inv_lambda = 1.0 / scale_m_;
   const auto& rot = tables().octave_rot;
   for (int k = 0; k < 12; ++k) {
-    const double w = octaveWeight(lambda, fp);
+    const double w = octaveWeight(lambda, inv_fp);
     if (w <= 0.0) break;
-    const double inv = 1.0 / lambda;
-    const double c = rot[k][0] * inv, sn = rot[k][1] * inv;
+    const double c = rot[k][0] * inv_lambda, sn = rot[k][1] * inv_lambda;
     fbm += w * amp * noise2(c * x - sn * y, sn * x + c * y, s.noise_seed + 977 * k);
     amp *= 0.65;
     lambda *= 0.5;
+    inv_lambda *= 2.0;
   }
 
   // Blobs with sharp edges (regions of another shade), widened to the footprint: the noise changes by
   // about 1 per lattice cell, so an edge of width fp spans fp / cell in noise units.
-  const double blob_inv = 1.0 / (0.8 * scale_m_);
+  const double blob_inv = inv_blob_cell_;
   const double nb = noise2(x * blob_inv, y * blob_inv, s.noise_seed + 40503) +
                     0.5 * noise2(2.0 * x * blob_inv, 2.0 * y * blob_inv, s.noise_seed + 21011);
   const double wb = std::max(0.01, 1.5 * fp * blob_inv);
-  const double region = smoothstep(-wb, wb, nb - 0.08);
+  const double region = smoothRamp(nb - 0.08, -wb, 0.5 / wb);
 
   // Small dark spots (faded to their mean once smaller than the footprint).
-  const double spot_inv = 1.0 / (0.15 * scale_m_);
+  const double spot_inv = inv_spot_cell_;
   const double ws = std::max(0.01, 1.5 * fp * spot_inv);
-  const double spot = ws < 0.5 ? smoothstep(-ws, ws, noise2(x * spot_inv, y * spot_inv, s.noise_seed + 5003) - 0.3) : 0.1;
+  const double spot =
+      ws < 0.5 ? smoothRamp(noise2(x * spot_inv, y * spot_inv, s.noise_seed + 5003) - 0.3, -ws, 0.5 / ws) : 0.1;
 
   // Rectangles with straight edges and corners (posters, panels, tiles): in a grid of cells of
   // 0.6 scale, 40% of the cells hold a rectangle of random extent and shade. Edges are smoothed over
   // the footprint; once the footprint reaches a quarter cell the rectangle fades to its mean.
-  const double rect = rectangles(x, y, fp, 0.6 * scale_m_, s.noise_seed + 7919);
+  const double rect = rectangles(x, y, fp, inv_rect_cell_, s.noise_seed + 7919);
 
   const double a = s.base + s.contrast * (0.45 * fbm + 0.28 * (region - 0.5) - 0.22 * spot + rect);
   return std::clamp(a, 0.03, 0.97);

@@ -71,7 +71,11 @@ World::World(std::vector<Primitive> primitives, TextureBank textures, std::uint6
   for (std::size_t s = 0; s < prims_.size() * kFacesPerPrimitive; ++s) styles_.push_back(textures_.makeStyle(seed, s));
   if (prims_.empty()) return;
   std::vector<Vec3> lo(prims_.size()), hi(prims_.size());
-  for (std::size_t i = 0; i < prims_.size(); ++i) prims_[i].bounds(lo[i], hi[i]);
+  prim_bounds_.resize(prims_.size());
+  for (std::size_t i = 0; i < prims_.size(); ++i) {
+    prims_[i].bounds(lo[i], hi[i]);
+    storeBounds(lo[i], hi[i], prim_bounds_[i].data(), prim_bounds_[i].data() + 3);
+  }
   order_.resize(prims_.size());
   for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<int>(i);
   nodes_.reserve(2 * prims_.size());
@@ -308,6 +312,91 @@ Hit World::raycast(const Vec3& origin, const Vec3& dir, double max_range, double
       if (tl <= lim) push(n.left, tl);
       if (tr <= lim) push(n.right, tr);
     }
+  }
+  finish(best, origin, dir, footprint_rad);
+  return best;
+}
+
+namespace {
+
+// Whether the sphere (c, r) meets the cone from o around unit axis a with half-angle `half`, within
+// `range` (conservative).
+inline bool sphereInCone(const Vec3& c, double r, const Vec3& o, const Vec3& a, double half, double range) {
+  const Vec3 v = c - o;
+  const double d = v.norm();
+  if (d <= r) return true;
+  if (d - r > range) return false;
+  const double angle = std::acos(std::clamp(v.dot(a) / d, -1.0, 1.0));
+  return angle <= half + std::asin(std::min(1.0, r / d)) + 1e-9;
+}
+
+}  // namespace
+
+void World::primitivesInCone(const Vec3& origin, const Vec3& axis, double half_angle_rad, double max_range,
+                             std::vector<int>& out) const {
+  out.clear();
+  if (nodes_.empty()) return;
+  auto sphere = [](const float* lo, const float* hi, Vec3& c) {
+    const Vec3 l(lo[0], lo[1], lo[2]), h(hi[0], hi[1], hi[2]);
+    c = 0.5 * (l + h);
+    return 0.5 * (h - l).norm();
+  };
+  int stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes_[static_cast<std::size_t>(stack[--top])];
+    Vec3 c;
+    const double r = sphere(n.lo, n.hi, c);
+    if (!sphereInCone(c, r, origin, axis, half_angle_rad, max_range)) continue;
+    if (n.count == 0) {
+      stack[top++] = n.left;
+      stack[top++] = n.right;
+      continue;
+    }
+    for (int k = n.first; k < n.first + n.count; ++k) {
+      const int i = order_[static_cast<std::size_t>(k)];
+      const auto& b = prim_bounds_[static_cast<std::size_t>(i)];
+      const double ri = sphere(b.data(), b.data() + 3, c);
+      if (sphereInCone(c, ri, origin, axis, half_angle_rad, max_range)) out.push_back(i);
+    }
+  }
+  // Nearest first along the axis (where the axis ray enters the bounds, else the bounding sphere's
+  // near side), so that the first hits bound the later tests. Ties by index: deterministic.
+  float o[3], inv[3];
+  for (int a = 0; a < 3; ++a) {
+    o[a] = static_cast<float>(origin[a]);
+    inv[a] = static_cast<float>(1.0 / (std::abs(axis[a]) > 1e-20 ? axis[a] : 1e-20));
+  }
+  std::vector<std::pair<float, int>> keyed;
+  keyed.reserve(out.size());
+  for (const int i : out) {
+    const auto& b = prim_bounds_[static_cast<std::size_t>(i)];
+    float key = slabEntry(b.data(), b.data() + 3, o, inv, static_cast<float>(max_range));
+    if (!(key <= static_cast<float>(max_range))) {
+      Vec3 c;
+      const double r = sphere(b.data(), b.data() + 3, c);
+      key = static_cast<float>((c - origin).norm() - r);
+    }
+    keyed.emplace_back(key, i);
+  }
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t k = 0; k < keyed.size(); ++k) out[k] = keyed[k].second;
+}
+
+Hit World::raycastAmong(const std::vector<int>& candidates, const Vec3& origin, const Vec3& dir, double max_range,
+                        double footprint_rad) const {
+  Hit best;
+  float o[3], inv[3];
+  for (int a = 0; a < 3; ++a) {
+    o[a] = static_cast<float>(origin[a]);
+    inv[a] = static_cast<float>(1.0 / (std::abs(dir[a]) > 1e-20 ? dir[a] : 1e-20));
+  }
+  for (const int i : candidates) {
+    const auto& b = prim_bounds_[static_cast<std::size_t>(i)];
+    const float lim = static_cast<float>((best.valid ? best.distance : max_range) * (1.0 + 1e-5) + 1e-4);
+    if (slabEntry(b.data(), b.data() + 3, o, inv, lim) > lim) continue;
+    intersect(i, origin, dir, max_range, best);
   }
   finish(best, origin, dir, footprint_rad);
   return best;

@@ -65,6 +65,7 @@ class TextureBank {
   TextureKind kind_ = TextureKind::Noise;
   double scale_m_ = 1.0;
   double tile_m_ = 2.0;
+  double inv_blob_cell_ = 1.0 / 0.8, inv_spot_cell_ = 1.0 / 0.15, inv_rect_cell_ = 1.0 / 0.6;  ///< 1 / cell sizes
   std::vector<MipImage> images_;
 };
 

@@ -9,6 +9,7 @@
 #include "livo/common/so3.hpp"
 #include "livo/sim/texture.hpp"
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -51,6 +52,15 @@ class World {
   /// First hit along origin + t dir, 0 < t <= max_range; `dir` must be a unit vector. The albedo is
   /// averaged over a footprint of `footprint_rad` * distance / cos(incidence) metres.
   Hit raycast(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad = 0.0) const;
+  /// Indices of the primitives whose bounds meet the cone from `origin` around the unit `axis` with
+  /// half-angle `half_angle_rad`, up to `max_range`: a superset of what any ray inside the cone can
+  /// hit (camera tiles use it to skip the BVH).
+  void primitivesInCone(const Vec3& origin, const Vec3& axis, double half_angle_rad, double max_range,
+                        std::vector<int>& out) const;
+  /// raycast() among `candidates` only: the same hit whenever they include every primitive the ray
+  /// can reach (e.g. from primitivesInCone()).
+  Hit raycastAmong(const std::vector<int>& candidates, const Vec3& origin, const Vec3& dir, double max_range,
+                   double footprint_rad = 0.0) const;
   /// Same result without the BVH (test oracle, slow).
   Hit raycastBruteForce(const Vec3& origin, const Vec3& dir, double max_range, double footprint_rad = 0.0) const;
   /// Unsigned distance from a point to the nearest surface (brute force, test oracle).
@@ -79,6 +89,7 @@ class World {
   void finish(Hit& h, const Vec3& origin, const Vec3& dir, double footprint_rad) const;
 
   std::vector<Primitive> prims_;
+  std::vector<std::array<float, 6>> prim_bounds_;  ///< lo xyz, hi xyz (rounded outwards)
   std::vector<int> order_;
   std::vector<Node> nodes_;
   std::vector<SurfaceStyle> styles_;
