@@ -209,7 +209,9 @@ int main(int argc, char** argv) {
       counters["preprocess_" + k] = double(v);
     MapSummary ms;
     ms.local_voxels = pipeline.odometry().map().numRootVoxels();
-    ms.bytes = pipeline.odometry().map().bytes();
+    ms.visual_points_local = pipeline.visualMap().size();
+    ms.bytes = pipeline.odometry().map().bytes() + pipeline.visualMap().bytes();
+    counters["images_wrong_size"] = double(pipeline.imagesWrongSize());
     const double rss = bytesToMb(peakRssBytes());
     std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
                                              {"log", args.log}, {"config", args.config}};
