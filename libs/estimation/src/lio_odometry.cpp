@@ -19,7 +19,21 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   root.section("lio").get("min_matches", min_matches);
 }
 
-LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(cfg_.map) {}
+namespace {
+HybridMapConfig globalMapConfig() {
+  HybridMapConfig c;
+  c.mode = MapMode::Global;
+  return c;
+}
+}  // namespace
+
+LioOdometry::LioOdometry(LioOdometryConfig cfg)
+    : cfg_(std::move(cfg)),
+      init_(cfg_.imu),
+      own_map_(std::make_unique<HybridMap>(globalMapConfig(), cfg_.map, VisualMapConfig{})),
+      map_(own_map_.get()) {}
+
+LioOdometry::LioOdometry(LioOdometryConfig cfg, HybridMap& map) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(&map) {}
 
 std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
                                                   const std::vector<ImuTracePoint>& trace) const {
@@ -55,7 +69,7 @@ void LioOdometry::insertIntoMap(const std::vector<BodyPoint>& pts) {
     pw.cov_world = worldPointCovariance(x_, P_, bp);
     world.push_back(pw);
   }
-  map_.insert(world);
+  map_->insertLidar(world);
 }
 
 LioFrameResult LioOdometry::process(const Frame& frame) {
@@ -96,7 +110,7 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
   if (map_started_ && !r.points.empty()) {
     NavState x = x_;
     StateCov P = P_;
-    const LioUpdateResult u = lidarUpdate(x, P, r.points, map_, cfg_.lio);
+    const LioUpdateResult u = lidarUpdate(x, P, r.points, map_->lidarMap(), cfg_.lio);
     r.n_matched = u.matched;
     r.iterations = u.iterations;
     r.rms_residual_m = u.rms_residual_m;

@@ -13,13 +13,22 @@ void PipelineConfig::load(const ConfigNode& root) {
   selector.load(root);
   vio.load(root);
   visual_map.load(root.section("vio"));
+  map.load(root.section("map"));
 }
+
+namespace {
+HybridMapConfig hybridConfig(const PipelineConfig& cfg) {
+  HybridMapConfig c = cfg.map;
+  c.mode = parseMapMode(cfg.map_mode);  // throws naming the value
+  return c;
+}
+}  // namespace
 
 Pipeline::Pipeline(PipelineConfig cfg)
     : cfg_(std::move(cfg)),
       recombiner_(cfg_.preprocess),
-      odometry_(cfg_.lio),
-      visual_map_(cfg_.visual_map),
+      map_(std::make_unique<HybridMap>(hybridConfig(cfg_), cfg_.lio.map, cfg_.visual_map)),
+      odometry_(cfg_.lio, *map_),
       selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)) {
   if (cfg_.camera.enabled) camera_ = CameraModel::create(cfg_.camera);
 }
@@ -50,6 +59,9 @@ FrameResult Pipeline::processFrame(const Frame& frame) {
       selector_.select(r.lio.state, r.lio.sigma_min, r.degenerate)) {
     visualStep(frame, r);
   }
+  // 7. Map maintenance at the frame's position: slides when due (their work spread over frames), the
+  // memory cap. Visual point pointers of this frame are not used beyond this point.
+  if (r.lio.initialized) r.map = map_->update(r.lio.state.p_world_imu);
   r.total_ms = watch.elapsedMs();
   ++frames_;
   return r;
@@ -86,7 +98,8 @@ void Pipeline::visualStep(const Frame& frame, FrameResult& r) {
   std::vector<Vec3> scan_world;
   scan_world.reserve(r.lio.points.size());
   for (const auto& bp : r.lio.points) scan_world.push_back(x.R_world_imu * bp.p_imu + x.p_world_imu);
-  const std::vector<VisualPoint*> pts = visual_map_.pointsInView(cam, x.pose() * T_imu_camera, scan_world);
+  // Both the local and the long-term visual maps are searched.
+  const std::vector<VisualPoint*> pts = map_->pointsInView(cam, x.pose() * T_imu_camera, scan_world);
 
   // Photometric update, sequential after the LiDAR one at the same time stamp.
   VioUpdateResult vu;
@@ -100,12 +113,12 @@ void Pipeline::visualStep(const Frame& frame, FrameResult& r) {
   const double gate = cfg_.vio.outlier_rms * cfg_.vio.outlier_rms;
   for (std::size_t i = 0; i < pts.size(); ++i) {
     if (vu.point_rms.size() == pts.size() && vu.point_rms[i] >= 0) {
-      visual_map_.reportPhotometricError(*pts[i], vu.point_rms[i] * vu.point_rms[i], gate);
-      if (visual_map_.addObservation(*pts[i], *gray, T_world_camera, vu.point_px[i], float(x.inv_exposure), frame.utime))
-        visual_map_.refine(*pts[i], &odometry_.map());
+      map_->reportPhotometricError(*pts[i], vu.point_rms[i] * vu.point_rms[i], gate);
+      if (map_->addObservation(*pts[i], *gray, T_world_camera, vu.point_px[i], float(x.inv_exposure), frame.utime))
+        map_->refine(*pts[i]);
     }
   }
-  visual_map_.removeBadPoints();
+  map_->removeBadPoints();
   std::vector<NewPointCandidate> candidates;
   candidates.reserve(r.lio.matched_index.size());
   for (std::size_t k = 0; k < r.lio.matched_index.size(); ++k) {
@@ -116,9 +129,9 @@ void Pipeline::visualStep(const Frame& frame, FrameResult& r) {
     c.cov_world = worldPointCovariance(x, P, bp);
     candidates.push_back(c);
   }
-  std::vector<bool> occupied = visual_map_.occupiedCells();
-  if (occupied.size() != static_cast<std::size_t>(visual_map_.gridFor(cam).size())) occupied.clear();
-  r.n_new_visual_points = visual_map_.addPoints(*gray, cam, T_world_camera, float(x.inv_exposure), frame.utime,
+  std::vector<bool> occupied = map_->occupiedCells();
+  if (occupied.size() != static_cast<std::size_t>(map_->gridFor(cam).size())) occupied.clear();
+  r.n_new_visual_points = map_->addPoints(*gray, cam, T_world_camera, float(x.inv_exposure), frame.utime,
                                                 candidates, occupied);
   selector_.markUsed(x);
   r.visual_used = true;

@@ -5,6 +5,7 @@
 #include "livo/common/config.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
+#include "livo/map/hybrid_map.hpp"
 #include "livo/map/voxel_map.hpp"
 
 #include <memory>
@@ -47,7 +48,12 @@ struct LioFrameResult {
 
 class LioOdometry {
  public:
+  /// Standalone: owns an unbounded LiDAR map (a global-mode HybridMap built from cfg.map).
   explicit LioOdometry(LioOdometryConfig cfg);
+  /// Inserts into and matches against `map`'s LiDAR map (not owned; must outlive this object; cfg.map
+  /// is not used, the map has its own configuration). Sliding and the memory cap are the map owner's
+  /// business (HybridMap::update, e.g. by Pipeline).
+  LioOdometry(LioOdometryConfig cfg, HybridMap& map);
   /// Processes one frame in time order. Frames before the IMU is initialised only feed it.
   LioFrameResult process(const Frame& frame);
 
@@ -57,8 +63,8 @@ class LioOdometry {
     P_ = P;
   }
   const LioOdometryConfig& config() const { return cfg_; }
-  const VoxelMap& map() const { return map_; }
-  VoxelMap& map() { return map_; }
+  /// The LiDAR voxel map (the local map in hybrid mode).
+  const VoxelMap& map() const { return map_->lidarMap(); }
   const NavState& state() const { return x_; }
   const StateCov& covariance() const { return P_; }
   bool initialized() const { return init_.done(); }
@@ -71,7 +77,8 @@ class LioOdometry {
   LioOdometryConfig cfg_;
   ImuInitializer init_;
   std::unique_ptr<ImuPropagator> propagator_;
-  VoxelMap map_;
+  std::unique_ptr<HybridMap> own_map_;  ///< standalone only
+  HybridMap* map_;                      ///< own_map_ or the external map
   NavState x_;
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;

@@ -4,7 +4,8 @@
 // Per frame: (1) recut the LiDAR stream at the image time with the IMU samples covering the sweep
 // (Recombiner), (2) propagate the IMU, undistort, run the iterated LiDAR update and insert the scan into
 // the voxel map (LioOdometry), (3) degeneracy check of the matched plane normals, (4) frame selection,
-// (5) on selected images the photometric update and (6) the visual map update.
+// (5) on selected images the photometric update, (6) the visual map update and (7) map maintenance:
+// slides of the hybrid map and its memory cap (HybridMap::update; nothing in global mode).
 #pragma once
 
 #include "livo/common/config.hpp"
@@ -12,12 +13,14 @@
 #include "livo/estimation/frame_selector.hpp"
 #include "livo/estimation/selector_config.hpp"
 #include "livo/estimation/vio_update.hpp"
+#include "livo/map/hybrid_map.hpp"
 #include "livo/map/visual_map.hpp"
 #include "livo/sensors/camera_model.hpp"
 #include "livo/sensors/camera_config.hpp"
 #include "livo/sensors/recombiner.hpp"
 
 #include <functional>
+#include <memory>
 #include <string>
 
 namespace livo {
@@ -29,8 +32,9 @@ struct PipelineConfig {
   SelectorConfig selector;
   VioConfig vio;
   VisualMapConfig visual_map;
+  HybridMapConfig map;  ///< section `map`; its mode comes from map_mode
   std::string visual_mode = "adaptive";  ///< adaptive | all | off (command line)
-  std::string map_mode = "hybrid";       ///< hybrid | global (command line)
+  std::string map_mode = "hybrid";       ///< hybrid | global (command line; overrides map.mode)
 
   /// Reads every section a rig config may hold that the pipeline uses (not channels).
   void load(const ConfigNode& root);
@@ -45,6 +49,7 @@ struct FrameResult {
   int n_new_visual_points = 0; ///< created this frame
   double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
   double vio_ms = 0.0;
+  MapUpdateReport map;         ///< step 7: slides, evictions, bytes (estimate unless recounted), ms
 };
 
 class Pipeline {
@@ -63,7 +68,13 @@ class Pipeline {
 
   const Recombiner& recombiner() const { return recombiner_; }
   const LioOdometry& odometry() const { return odometry_; }
-  const VisualMap& visualMap() const { return visual_map_; }
+  /// The local visual map (hybrid mode) or the only one (global mode).
+  const VisualMap& visualMap() const { return map_->localVisual(); }
+  /// The whole map: LiDAR map, local and long-term visual maps, counters.
+  const HybridMap& map() const { return *map_; }
+  /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json
+  /// map {local_voxels, visual_points_local, visual_points_longterm, bytes}.
+  HybridMapStats mapStats() const { return map_->stats(); }
   /// Images whose size does not match the camera calibration (skipped by the visual update).
   std::size_t imagesWrongSize() const { return images_wrong_size_; }
   const PipelineConfig& config() const { return cfg_; }
@@ -75,9 +86,9 @@ class Pipeline {
 
   PipelineConfig cfg_;
   Recombiner recombiner_;
+  std::unique_ptr<HybridMap> map_;  ///< heap: odometry_ keeps a reference, the pipeline stays movable
   LioOdometry odometry_;
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
-  VisualMap visual_map_;
   FrameSelector selector_;
   std::size_t images_wrong_size_ = 0;
   int low_sigma_run_ = 0;  ///< consecutive frames with sigma_min below the threshold

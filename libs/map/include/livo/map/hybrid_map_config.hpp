@@ -1,0 +1,55 @@
+// Configuration of the hybrid map (ALGORITHMS.md "The two ideas", 3; section 3 "Sliding"; section 8
+// "Memory"): a local map (LiDAR planes + visual points) bounded by a cube around the robot, a sparse
+// long-term visual map bounded by a larger cube, and an optional memory cap. Read from the rig
+// config's `map` section; the mode is a command-line choice (livo-run --map-mode) set in code.
+#pragma once
+
+#include "livo/common/config.hpp"
+
+#include <cstddef>
+#include <string>
+
+namespace livo {
+
+/// hybrid: local cube + long-term visual map + memory cap (this project).
+/// global: one unbounded map, never slid nor evicted (FAST-LIVO2 behaviour).
+enum class MapMode { Hybrid, Global };
+
+/// "hybrid" | "global"; throws std::invalid_argument naming the value otherwise.
+MapMode parseMapMode(const std::string& s);
+const char* toString(MapMode m);
+
+struct HybridMapConfig {
+  MapMode mode = MapMode::Hybrid;  ///< command line (--map-mode), not read from the file
+
+  // Local map: LiDAR root voxels and visual points (paper: edge 200 m, slid every 20 m).
+  double local_edge_m = 200.0;     ///< edge of the local cube centred on the robot at the last slide, m
+  double slide_distance_m = 20.0;  ///< slide once the robot is this far from the last slide position, m
+
+  // Long-term visual map: visual points that left the local cube (paper: edge 800 m, slid every 100 m).
+  double longterm_edge_m = 800.0;   ///< edge of the long-term cube, m (>= local_edge_m)
+  double longterm_slide_m = 100.0;  ///< long-term slide distance, m
+
+  // Memory budget (hybrid mode only).
+  double memory_cap_mb = 0.0;  ///< cap on the accounted bytes of all map structures, MiB; 0 = none
+  double cap_high_water = 0.95;  ///< evict when the bytes exceed this fraction of the cap ...
+  double cap_low_water = 0.85;   ///< ... down to this fraction (hysteresis: evictions stay rare)
+  /// With a cap, the exact byte count (a walk of every structure) is refreshed at least every this
+  /// many updates, and whenever the O(1) estimate between walks passes the high-water mark.
+  int recount_interval = 20;
+
+  // Incremental sliding (a slide must not stall a frame).
+  double tile_edge_m = 10.0;  ///< edge of the index tiles grouping LiDAR root voxels, m
+  /// Root voxels removed plus visual points moved or deleted per update(); the rest of a slide's work
+  /// carries over to the next updates. 0 = unlimited (the whole slide in one update).
+  int max_removals_per_update = 1000;
+
+  /// Reads the keys above (same names) from `node` (the `map` section) and validates them; throws
+  /// ConfigError naming the key on a bad value.
+  void load(const ConfigNode& node);
+  /// Throws std::invalid_argument naming the first invalid field (used by HybridMap's constructor).
+  void validate() const;
+  std::size_t capBytes() const { return static_cast<std::size_t>(memory_cap_mb * 1024.0 * 1024.0); }
+};
+
+}  // namespace livo

@@ -1,0 +1,576 @@
+// libs/map hybrid map: sliding (local voxels and visual points against a brute-force cube test over
+// everything inserted, incremental under a per-update budget, long-term deletion, revisits), the
+// memory cap (bytes under the cap, eviction order farthest first against brute-force distances,
+// long-term before local), global mode, retrieval from both visual maps, byte accounting, a 3 km
+// synthetic drive (hybrid bytes flatten, global bytes grow) and the slide time on a large map.
+#include "livo/common/timing.hpp"
+#include "livo/map/hybrid_map.hpp"
+#include "livo/sensors/camera_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <random>
+#include <set>
+#include <tuple>
+
+using namespace livo;
+
+namespace {
+
+using KeyT = std::tuple<std::int64_t, std::int64_t, std::int64_t>;
+KeyT tup(const VoxelKey& k) { return {k.x, k.y, k.z}; }
+
+bool outside(const Vec3& c, const Vec3& center, double half) { return ((c - center).cwiseAbs().array() > half).any(); }
+
+// Planar patch: every root voxel of edge `s` in [x0, x1) x [y0, y1) (at height z) gets `n` noisy
+// points on the plane z = const, so that each root voxel holds one plane leaf (visible to forEachPlane).
+void groundPatch(std::vector<PointWithCov>& out, double x0, double x1, double y0, double y1, double z, double s,
+                 std::mt19937& rng, int n = 8) {
+  std::uniform_real_distribution<double> u(0.05, 0.95);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  for (double x = std::floor(x0 / s) * s; x < x1 - 1e-9; x += s)
+    for (double y = std::floor(y0 / s) * s; y < y1 - 1e-9; y += s)
+      for (int i = 0; i < n; ++i) {
+        PointWithCov p;
+        p.p_world = Vec3(x + u(rng) * s, y + u(rng) * s, z + noise(rng));
+        p.cov_world = Mat3::Identity() * 1e-4;
+        out.push_back(p);
+      }
+}
+
+// Same for a vertical wall y = y_wall, x in [x0, x1), z in [z0, z1).
+void wallPatch(std::vector<PointWithCov>& out, double x0, double x1, double y_wall, double z0, double z1, double s,
+               std::mt19937& rng, int n = 8) {
+  std::uniform_real_distribution<double> u(0.05, 0.95);
+  std::normal_distribution<double> noise(0.0, 0.003);
+  for (double x = std::floor(x0 / s) * s; x < x1 - 1e-9; x += s)
+    for (double z = std::floor(z0 / s) * s; z < z1 - 1e-9; z += s)
+      for (int i = 0; i < n; ++i) {
+        PointWithCov p;
+        p.p_world = Vec3(x + u(rng) * s, y_wall + noise(rng), z + u(rng) * s);
+        p.cov_world = Mat3::Identity() * 1e-4;
+        out.push_back(p);
+      }
+}
+
+std::unique_ptr<VisualPoint> visualPoint(std::int64_t id, const Vec3& p, bool with_reference = true, int n_obs = 1) {
+  auto vp = std::make_unique<VisualPoint>();
+  vp->id = id;
+  vp->p_world = p;
+  vp->normal = Vec3(-1, 0, 0);
+  if (with_reference) {
+    for (int i = 0; i < n_obs; ++i) vp->obs.emplace_back();
+    vp->reference = 0;
+  }
+  return vp;
+}
+
+std::set<KeyT> rootKeysWithPlanes(const VoxelMap& m) {
+  std::set<KeyT> keys;
+  m.forEachPlane([&](const VoxelKey& k, const Plane&) { keys.insert(tup(k)); });
+  return keys;
+}
+
+std::set<std::int64_t> ids(const VisualMap& m) {
+  std::set<std::int64_t> out;
+  m.forEach([&](const VisualPoint& p) { out.insert(p.id); });
+  return out;
+}
+
+// Small cubes for fast tests: local 40 m (slid every 5 m), long-term 100 m (slid every 10 m), 1 m voxels.
+HybridMapConfig smallConfig() {
+  HybridMapConfig c;
+  c.local_edge_m = 40.0;
+  c.slide_distance_m = 5.0;
+  c.longterm_edge_m = 100.0;
+  c.longterm_slide_m = 10.0;
+  c.tile_edge_m = 4.0;
+  c.max_removals_per_update = 0;
+  return c;
+}
+
+VoxelMapConfig voxels1m() {
+  VoxelMapConfig v;
+  v.voxel_size_m = 1.0;
+  return v;
+}
+
+// A scene on [-60, 60]^2: ground roots everywhere, visual points on a grid (every 7th without a reference).
+struct Scene {
+  std::set<KeyT> roots;
+  std::map<std::int64_t, std::pair<Vec3, bool>> points;  // id -> (position, has reference)
+};
+
+Scene fillScene(HybridMap& map, unsigned seed) {
+  Scene sc;
+  std::mt19937 rng(seed);
+  std::vector<PointWithCov> pts;
+  groundPatch(pts, -60, 60, -60, 60, 0.3, 1.0, rng);
+  EXPECT_EQ(map.insertLidar(pts), pts.size());
+  for (const auto& p : pts) sc.roots.insert(tup(map.lidarMap().keyOf(p.p_world)));
+  std::uniform_real_distribution<double> u(-59, 59);
+  for (std::int64_t id = 1; id <= 3000; ++id) {
+    const Vec3 p(u(rng), u(rng), 1.0 + 0.01 * double(id % 50));
+    const bool ref = id % 7 != 0;
+    EXPECT_TRUE(map.localVisual().insert(visualPoint(id, p, ref)));
+    sc.points[id] = {p, ref};
+  }
+  return sc;
+}
+
+// Brute-force model of the slide rules over everything inserted, applied at every slide the map reports:
+// long-term points leaving the long-term cube are deleted; then root voxels and local points leaving
+// the local cube are deleted / moved (points with a reference inside the long-term cube) and long-term
+// points inside the local cube come back. Cubes are tested on voxel centres.
+struct SlideModel {
+  std::set<KeyT> roots;
+  std::map<std::int64_t, std::pair<Vec3, bool>> local, longterm;
+  double lidar_voxel = 1.0, visual_voxel = 0.5, local_half = 20.0, lt_half = 50.0;
+  std::size_t lt_deleted = 0;  ///< long-term points deleted beyond the long-term cube
+
+  Vec3 vc(const Vec3& p) const { return VoxelKey::fromPoint(p, visual_voxel).center(visual_voxel); }
+  void apply(const HybridMap& map, const MapUpdateReport& rep) {
+    if (rep.longterm_slid) {
+      for (auto it = longterm.begin(); it != longterm.end();) {
+        if (outside(vc(it->second.first), map.longtermCenter(), lt_half)) {
+          it = longterm.erase(it);
+          ++lt_deleted;
+        } else {
+          ++it;
+        }
+      }
+    }
+    if (!rep.slid) return;
+    const Vec3 c = map.localCenter();
+    for (auto it = roots.begin(); it != roots.end();) {
+      const VoxelKey k{std::get<0>(*it), std::get<1>(*it), std::get<2>(*it)};
+      it = outside(k.center(lidar_voxel), c, local_half) ? roots.erase(it) : std::next(it);
+    }
+    std::map<std::int64_t, std::pair<Vec3, bool>> back;
+    for (auto it = longterm.begin(); it != longterm.end();) {
+      if (outside(vc(it->second.first), c, local_half)) {
+        ++it;
+      } else {
+        back.insert(*it);
+        it = longterm.erase(it);
+      }
+    }
+    for (auto it = local.begin(); it != local.end();) {
+      if (!outside(vc(it->second.first), c, local_half)) {
+        ++it;
+        continue;
+      }
+      if (it->second.second && !outside(vc(it->second.first), map.longtermCenter(), lt_half)) longterm.insert(*it);
+      it = local.erase(it);
+    }
+    local.insert(back.begin(), back.end());
+  }
+  void expectMatches(const HybridMap& map) const {
+    EXPECT_EQ(rootKeysWithPlanes(map.lidarMap()), roots);
+    EXPECT_EQ(map.lidarMap().numRootVoxels(), roots.size());
+    std::set<std::int64_t> want_local, want_lt;
+    for (const auto& kv : local) want_local.insert(kv.first);
+    for (const auto& kv : longterm) want_lt.insert(kv.first);
+    EXPECT_EQ(ids(map.localVisual()), want_local);
+    EXPECT_EQ(ids(map.longtermVisual()), want_lt);
+  }
+};
+
+SlideModel modelOf(const Scene& sc) {
+  SlideModel m;
+  m.roots = sc.roots;
+  m.local = sc.points;
+  return m;
+}
+
+}  // namespace
+
+TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
+  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
+  const Scene sc = fillScene(map, 7);
+  ASSERT_EQ(rootKeysWithPlanes(map.lidarMap()).size(), sc.roots.size()) << "every root must hold a plane";
+  SlideModel model = modelOf(sc);
+  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0), Vec3(31, -4, 0)}) {
+    const MapUpdateReport rep = map.update(robot);
+    model.apply(map, rep);
+    model.expectMatches(map);
+    if (robot.x() == 3) {
+      EXPECT_FALSE(rep.slid) << "3 m is below the slide distance";
+    }
+    if (robot.x() == 6) {
+      EXPECT_TRUE(rep.slid);
+    }
+  }
+  EXPECT_EQ(map.counters().slides, 4u);  // the first update centres the cube, then 6, 13 and 31 m
+  EXPECT_GT(map.counters().moved_to_longterm, 1000u);
+  EXPECT_GT(map.counters().deleted_points, 100u);  // points without a reference are not kept
+  EXPECT_GT(map.counters().moved_to_local, 10u);   // the cube at x = 31 covers points that left at x = 13
+  map.longtermVisual().forEach([](const VisualPoint& p) { EXPECT_NE(p.referenceObs(), nullptr); });
+}
+
+TEST(HybridMap, SlideWorkIsSpreadOverUpdatesWithinTheBudget) {
+  HybridMapConfig cfg = smallConfig();
+  cfg.max_removals_per_update = 150;
+  HybridMap budgeted(cfg, voxels1m(), VisualMapConfig{});
+  HybridMap full(smallConfig(), voxels1m(), VisualMapConfig{});
+  fillScene(budgeted, 11);
+  fillScene(full, 11);
+  full.update(Vec3(0, 0, 0));
+  int updates = 0;
+  MapUpdateReport rep = budgeted.update(Vec3(0, 0, 0));
+  for (;; rep = budgeted.update(Vec3(0, 0, 0))) {
+    ++updates;
+    EXPECT_LE(rep.removed_voxels + rep.moved_to_longterm + rep.moved_to_local + rep.deleted_points, 150u);
+    if (rep.pending == 0) break;
+    ASSERT_LT(updates, 1000);
+  }
+  std::cout << "slide work over " << updates << " updates of at most 150 items\n";
+  EXPECT_GT(updates, 10);
+  EXPECT_EQ(rootKeysWithPlanes(budgeted.lidarMap()), rootKeysWithPlanes(full.lidarMap()));
+  EXPECT_EQ(ids(budgeted.localVisual()), ids(full.localVisual()));
+  EXPECT_EQ(ids(budgeted.longtermVisual()), ids(full.longtermVisual()));
+}
+
+TEST(HybridMap, LongtermDeletesBeyondItsEdgeAndRevisitsReturnPoints) {
+  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
+  const Scene sc = fillScene(map, 3);
+  SlideModel model = modelOf(sc);
+  // 45 m along +x in 1 m steps (the long-term cube, half edge 50, follows every 10 m), then back.
+  for (int step = 0; step <= 90; ++step) {
+    const int x = step <= 45 ? step : 90 - step;
+    const MapUpdateReport rep = map.update(Vec3(x, 0, 0));
+    model.apply(map, rep);
+    model.expectMatches(map);
+  }
+  EXPECT_GT(model.lt_deleted, 100u);
+  EXPECT_GE(map.counters().longterm_slides, 9u);
+  EXPECT_GT(map.counters().moved_to_local, 100u);
+  std::cout << "long-term: " << map.counters().moved_to_longterm << " moved in, " << map.counters().moved_to_local
+            << " back, " << map.counters().deleted_points << " deleted\n";
+}
+
+TEST(HybridMap, MemoryCapEvictsFarthestLongtermPointsFirst) {
+  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
+  fillScene(map, 5);
+  const Vec3 robot(10, 0, 0);
+  map.update(Vec3(0, 0, 0));
+  map.update(robot);
+  const HybridMapStats before = map.stats();
+  ASSERT_GT(before.visual_points_longterm, 500u);
+  std::map<std::int64_t, double> lt_dist;
+  map.longtermVisual().forEach([&](const VisualPoint& p) { lt_dist[p.id] = (p.p_world - robot).norm(); });
+  // A cap that part of the long-term map must make room for.
+  const double cap_mb = double(before.bytes - before.bytes_visual_longterm / 2) / (1024.0 * 1024.0);
+  map.setMemoryCapMb(cap_mb);
+  const MapUpdateReport rep = map.update(robot);
+  const HybridMapStats after = map.stats();
+  EXPECT_LE(after.bytes, after.cap_bytes);
+  EXPECT_TRUE(rep.recounted);
+  EXPECT_EQ(rep.bytes, after.bytes);
+  EXPECT_GT(rep.evicted_longterm_points, 0u);
+  EXPECT_LT(after.visual_points_longterm, before.visual_points_longterm);
+  EXPECT_EQ(rep.evicted_local_voxels, 0u) << "the long-term points are evicted first";
+  EXPECT_EQ(rep.evicted_local_points, 0u);
+  EXPECT_EQ(after.local_voxels, before.local_voxels);
+  // Farthest first: every kept long-term point is at most as far from the robot as every evicted one.
+  double max_kept = 0.0, min_evicted = 1e300;
+  for (const auto& [id, d] : lt_dist) {
+    if (map.longtermVisual().find(id)) max_kept = std::max(max_kept, d);
+    else min_evicted = std::min(min_evicted, d);
+  }
+  EXPECT_LE(max_kept, min_evicted);
+  EXPECT_EQ(map.counters().eviction_events, 1u);
+  // Hysteresis: the next updates (nothing new) do not evict again.
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(map.update(robot).evicted_longterm_points, 0u);
+  EXPECT_EQ(map.counters().eviction_events, 1u);
+}
+
+TEST(HybridMap, MemoryCapEvictsFarthestLocalContentWhenLongtermIsGone) {
+  HybridMapConfig cfg = smallConfig();
+  cfg.memory_cap_mb = 1.0;
+  HybridMap map(cfg, voxels1m(), VisualMapConfig{});
+  const Scene sc = fillScene(map, 9);
+  const Vec3 robot(2, 1, 0);
+  const MapUpdateReport rep = map.update(robot);
+  const HybridMapStats s = map.stats();
+  std::cout << "cap " << cfg.capBytes() << " B: " << s.bytes << " B after evicting " << rep.evicted_longterm_points
+            << " long-term points, " << rep.evicted_local_voxels << " voxels, " << rep.evicted_local_points
+            << " local points\n";
+  EXPECT_LE(s.bytes, cfg.capBytes());
+  EXPECT_GE(double(s.bytes), 0.7 * double(cfg.capBytes())) << "evicts down to the low-water mark, not far below";
+  EXPECT_EQ(s.visual_points_longterm, 0u);
+  EXPECT_GT(rep.evicted_local_voxels, 0u);
+  // Farthest first over voxels (centres) and local points (positions) together.
+  const std::set<KeyT> kept = rootKeysWithPlanes(map.lidarMap());
+  double max_kept = 0.0, min_evicted = 1e300;
+  for (const KeyT& k : sc.roots) {
+    const VoxelKey key{std::get<0>(k), std::get<1>(k), std::get<2>(k)};
+    const Vec3 c = key.center(1.0);
+    if (outside(c, map.localCenter(), 20.0)) continue;  // removed by the slide, not the cap
+    const double d = (c - robot).norm();
+    if (kept.count(k)) max_kept = std::max(max_kept, d);
+    else min_evicted = std::min(min_evicted, d);
+  }
+  // Local points: kept ones count as kept, those inside the cube that are gone were evicted.
+  const double vs = map.localVisual().config().voxel_size_m;
+  for (const auto& [id, pr] : sc.points) {
+    if (outside(VoxelKey::fromPoint(pr.first, vs).center(vs), map.localCenter(), 20.0)) continue;
+    const double d = (pr.first - robot).norm();
+    if (map.localVisual().find(id)) max_kept = std::max(max_kept, d);
+    else min_evicted = std::min(min_evicted, d);
+  }
+  EXPECT_LE(max_kept, min_evicted + 1e-9);
+  // Later updates keep the bytes under the cap.
+  for (int i = 0; i < 5; ++i) {
+    const MapUpdateReport r = map.update(robot);
+    EXPECT_LE(r.bytes, cfg.capBytes());
+  }
+}
+
+TEST(HybridMap, GlobalModeNeverSlidesNorEvicts) {
+  HybridMapConfig cfg = smallConfig();
+  cfg.mode = MapMode::Global;
+  cfg.memory_cap_mb = 0.1;
+  HybridMap map(cfg, voxels1m(), VisualMapConfig{});
+  const Scene sc = fillScene(map, 1);
+  for (int x = 0; x <= 200; x += 10) {
+    const MapUpdateReport rep = map.update(Vec3(x, 0, 0));
+    EXPECT_FALSE(rep.slid);
+    EXPECT_EQ(rep.removed_voxels + rep.evicted_local_voxels + rep.evicted_longterm_points, 0u);
+  }
+  EXPECT_EQ(map.lidarMap().numRootVoxels(), sc.roots.size());
+  EXPECT_EQ(map.localVisual().size(), sc.points.size());
+  EXPECT_EQ(map.longtermVisual().size(), 0u);
+  EXPECT_EQ(map.counters().slides + map.counters().eviction_events, 0u);
+  EXPECT_GT(map.stats().bytes, cfg.capBytes()) << "the cap does not apply in global mode";
+  EXPECT_EQ(map.stats().cap_bytes, 0u);
+}
+
+TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
+  CameraConfig cc;
+  cc.enabled = true;
+  cc.model = "pinhole";
+  cc.width = 640;
+  cc.height = 480;
+  cc.fx = cc.fy = 400.0;
+  cc.cx = 319.5;
+  cc.cy = 239.5;
+  const auto cam = CameraModel::create(cc);
+  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
+  // Camera at the origin looking along +x (camera z = world x, camera x = -world y, camera y = -world z).
+  Mat3 R_wc;
+  R_wc << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Pose T_wc = Pose::Identity();
+  T_wc.linear() = R_wc;
+  const ImageGrid grid = map.gridFor(*cam);
+  map.update(Vec3(0, 0, 0));
+  // One point per grid cell centre (cells 30 px apart: no occlusion between them), depth 4 m (stays
+  // local) or 30 m (moves to the long-term map when the cube slides to x = -15).
+  std::vector<Vec3> scan;
+  std::map<int, std::int64_t> cell_id;
+  std::int64_t id = 1;
+  for (int r = 2; r < grid.rows - 2; ++r)
+    for (int c = 2; c < grid.cols - 2; ++c, ++id) {
+      const double z = (r + c) % 2 == 0 ? 4.0 : 30.0;
+      const Vec2 px((c + 0.5) * grid.cell_px, (r + 0.5) * grid.cell_px);
+      const Vec3 p = T_wc * Vec3((px.x() - cc.cx) / cc.fx * z, (px.y() - cc.cy) / cc.fy * z, z);
+      ASSERT_TRUE(map.localVisual().insert(visualPoint(id, p)));
+      scan.push_back(p);
+      cell_id[grid.cellOf(px)] = id;
+    }
+  map.update(Vec3(-15, 0, 0));  // cube [-35, 5] in x
+  ASSERT_GT(map.longtermVisual().size(), 50u);
+  ASSERT_GT(map.localVisual().size(), 50u);
+  std::vector<Vec2> pixels;
+  const std::vector<VisualPoint*> got = map.pointsInView(*cam, T_wc, scan, &pixels);
+  ASSERT_EQ(got.size(), cell_id.size());
+  ASSERT_EQ(pixels.size(), got.size());
+  std::size_t k = 0, from_lt = 0;
+  for (const auto& [cell, want] : cell_id) {  // ordered by cell
+    EXPECT_EQ(got[k]->id, want);
+    EXPECT_EQ(grid.cellOf(pixels[k]), cell);
+    EXPECT_TRUE(map.occupiedCells()[std::size_t(cell)]);
+    from_lt += map.isLongterm(*got[k]);
+    ++k;
+  }
+  EXPECT_EQ(from_lt, map.longtermVisual().size());
+  EXPECT_EQ(map.lastRetrievalLongterm(), from_lt);
+  EXPECT_EQ(map.lastRetrieval().selected, got.size());
+  // Per cell, the nearer of the two maps' winners: add a local point at depth 3 m next to a
+  // long-term winner (12 px away), then it wins that cell.
+  const VisualPoint* lt_point = nullptr;
+  for (VisualPoint* p : got)
+    if (map.isLongterm(*p)) lt_point = p;
+  ASSERT_NE(lt_point, nullptr);
+  Vec2 lt_px;
+  ASSERT_TRUE(cam->project(T_wc.inverse() * lt_point->p_world, lt_px));
+  const Vec2 near_px = lt_px + Vec2(12, 0);
+  const Vec3 near = T_wc * Vec3((near_px.x() - cc.cx) / cc.fx * 3.0, (near_px.y() - cc.cy) / cc.fy * 3.0, 3.0);
+  ASSERT_TRUE(map.localVisual().insert(visualPoint(100000, near)));
+  scan.push_back(near);
+  const std::int64_t lt_id = lt_point->id;
+  const std::vector<VisualPoint*> got2 = map.pointsInView(*cam, T_wc, scan);
+  ASSERT_EQ(got2.size(), got.size());
+  bool found_near = false, found_lt = false;
+  for (VisualPoint* p : got2) {
+    found_near |= p->id == 100000;
+    found_lt |= p->id == lt_id;
+  }
+  EXPECT_TRUE(found_near);
+  EXPECT_FALSE(found_lt);
+  // Photometric outliers are removed from the map that holds them.
+  VisualPoint* victim = nullptr;
+  for (VisualPoint* p : got2)
+    if (map.isLongterm(*p)) victim = p;
+  ASSERT_NE(victim, nullptr);
+  const std::int64_t victim_id = victim->id;
+  for (int i = 0; i <= map.localVisual().config().max_bad_updates; ++i) map.reportPhotometricError(*victim, 1e6, 1.0);
+  EXPECT_EQ(map.removeBadPoints(), 1u);
+  EXPECT_EQ(map.longtermVisual().find(victim_id), nullptr);
+}
+
+TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
+  HybridMapConfig cfg = smallConfig();
+  cfg.memory_cap_mb = 1000.0;  // never reached; makes update() count exactly
+  cfg.recount_interval = 1;
+  HybridMap map(cfg, voxels1m(), VisualMapConfig{});
+  fillScene(map, 2);
+  const MapUpdateReport rep = map.update(Vec3(10, 0, 0));
+  const HybridMapStats s = map.stats();
+  EXPECT_EQ(s.bytes_lidar, map.lidarMap().bytes());
+  EXPECT_EQ(s.bytes_visual_local, map.localVisual().bytes() + map.localVisual().scratchBytes());
+  EXPECT_EQ(s.bytes_visual_longterm, map.longtermVisual().bytes() + map.longtermVisual().scratchBytes());
+  EXPECT_EQ(s.bytes, s.bytes_lidar + s.bytes_visual_local + s.bytes_visual_longterm + s.bytes_index);
+  EXPECT_EQ(s.bytes, map.bytes());
+  EXPECT_GT(s.bytes_index, 0u);
+  EXPECT_LT(s.bytes_index, s.bytes_lidar / 5) << "the tile index is small next to the map";
+  EXPECT_EQ(rep.bytes, s.bytes);
+  // Right after an exact count the O(1) estimate equals it (up to rounding).
+  EXPECT_NEAR(double(map.bytesEstimate()), double(s.bytes), 8.0);
+  std::cout << "bytes: lidar " << s.bytes_lidar << " (" << double(s.bytes_lidar) / double(s.local_voxels)
+            << " per root voxel), visual local " << s.bytes_visual_local << ", long-term " << s.bytes_visual_longterm
+            << ", index " << s.bytes_index << "\n";
+}
+
+namespace {
+
+// A synthetic 3 km drive along +x in 2 m steps: per step the LiDAR sees a new 2 m slab 40 m ahead
+// (ground strip and a wall, 0.5 m voxels: 24 root voxels with a plane each) and three new visual
+// points with one observation. Returns the exact bytes after each step in `bytes` (every `every` steps).
+struct DriveResult {
+  std::vector<std::size_t> bytes;  ///< stats().bytes at steps every-1, 2 every-1, ...
+  std::size_t max_report_bytes = 0;
+  HybridMapCounters counters;
+};
+
+DriveResult drive(MapMode mode, double cap_mb, int steps, int every) {
+  HybridMapConfig cfg;
+  cfg.mode = mode;
+  cfg.memory_cap_mb = cap_mb;
+  HybridMap map(cfg, VoxelMapConfig{}, VisualMapConfig{});
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 2.0);
+  DriveResult out;
+  std::int64_t id = 1;
+  for (int step = 0; step < steps; ++step) {
+    const double x = 2.0 * step;
+    std::vector<PointWithCov> pts;
+    groundPatch(pts, x + 40, x + 42, -1, 1, 0.2, 0.5, rng);
+    wallPatch(pts, x + 40, x + 42, 2.1, 0, 1, 0.5, rng);
+    map.insertLidar(pts);
+    for (int i = 0; i < 3; ++i) map.localVisual().insert(visualPoint(id++, Vec3(x + 40 + u(rng), 2.05, 0.2 + 0.3 * i)));
+    const MapUpdateReport rep = map.update(Vec3(x, 0, 0));
+    out.max_report_bytes = std::max(out.max_report_bytes, rep.bytes);
+    if ((step + 1) % every == 0) out.bytes.push_back(map.stats().bytes);
+  }
+  out.counters = map.counters();
+  return out;
+}
+
+}  // namespace
+
+TEST(HybridMap, LongDriveHybridBytesFlattenWhileGlobalGrows) {
+  const int steps = 1500, every = 100;  // 3 km; bytes every 200 m
+  const DriveResult hybrid = drive(MapMode::Hybrid, 0.0, steps, every);
+  const DriveResult global = drive(MapMode::Global, 0.0, steps, every);
+  const std::size_t third = std::size_t(steps / 3 / every) - 1;  // 1 km
+  std::cout << "km    hybrid MB   global MB\n";
+  for (std::size_t i = 0; i < hybrid.bytes.size(); ++i)
+    std::cout << 0.2 * double(i + 1) << "  " << double(hybrid.bytes[i]) / 1048576.0 << "  "
+              << double(global.bytes[i]) / 1048576.0 << "\n";
+  const double h_third = double(hybrid.bytes[third]), h_end = double(hybrid.bytes.back());
+  const double g_third = double(global.bytes[third]), g_end = double(global.bytes.back());
+  EXPECT_NEAR(h_end, h_third, 0.10 * h_third) << "hybrid bytes flatten";
+  EXPECT_GT(g_end, 2.0 * g_third) << "global bytes keep growing";
+  EXPECT_LE(h_end, 0.5 * g_end);
+  EXPECT_EQ(global.counters.slides, 0u);
+  std::cout << "hybrid: " << hybrid.counters.slides << " slides, " << hybrid.counters.longterm_slides
+            << " long-term slides, worst update " << hybrid.counters.max_update_ms << " ms\n";
+
+  // With a cap of 60% of the uncapped steady state, every update reports bytes under the cap and the
+  // exact count every 200 m is under it too.
+  const double cap_mb = 0.6 * h_end / 1048576.0;
+  const DriveResult capped = drive(MapMode::Hybrid, cap_mb, steps, every);
+  const std::size_t cap = static_cast<std::size_t>(cap_mb * 1048576.0);
+  EXPECT_LE(capped.max_report_bytes, cap);
+  for (const std::size_t b : capped.bytes) EXPECT_LE(b, cap);
+  EXPECT_GT(capped.counters.eviction_events, 0u);
+  std::cout << "capped at " << cap_mb << " MB: " << capped.counters.eviction_events << " eviction events, "
+            << capped.counters.evicted_longterm_points << " long-term points, " << capped.counters.evicted_local_voxels
+            << " voxels, " << capped.counters.evicted_local_points << " local points evicted, "
+            << capped.counters.recounts << " exact counts, worst update " << capped.counters.max_update_ms << " ms\n";
+}
+
+TEST(HybridMap, SlideTimeOnALargeStreetMap) {
+  // A 260 m street with 0.5 m voxels: ground |y| < 10 and two 10 m walls, about 42k root voxels (each a plane).
+  std::mt19937 rng(23);
+  std::vector<PointWithCov> pts;
+  groundPatch(pts, 0, 260, -10, 10, 0.2, 0.5, rng);
+  wallPatch(pts, 0, 260, 10.1, 0, 10, 0.5, rng);
+  wallPatch(pts, 0, 260, -10.1, 0, 10, 0.5, rng);
+  const auto time_slide = [&](int budget, std::size_t* roots_after) {
+    HybridMapConfig cfg;
+    cfg.max_removals_per_update = budget;
+    HybridMap map(cfg, VoxelMapConfig{}, VisualMapConfig{});
+    map.insertLidar(pts);
+    double worst_first = 0.0, worst_slide = 0.0;
+    int updates = 0;
+    // First update at x = 130: the 200 m cube drops 30 m at each end; then a 20 m slide to x = 150.
+    for (MapUpdateReport r = map.update(Vec3(130, 0, 0));; r = map.update(Vec3(130, 0, 0))) {
+      worst_first = std::max(worst_first, r.ms);
+      if (budget > 0) {
+        EXPECT_LE(r.removed_voxels, std::size_t(budget));
+      }
+      if (r.pending == 0) break;
+    }
+    const std::size_t before = map.lidarMap().numRootVoxels();
+    for (MapUpdateReport r = map.update(Vec3(150, 0, 0));; r = map.update(Vec3(150, 0, 0))) {
+      worst_slide = std::max(worst_slide, r.ms);
+      ++updates;
+      if (r.pending == 0) break;
+    }
+    Stopwatch w;
+    const HybridMapStats s = map.stats();
+    std::cout << "budget " << budget << ": first centring worst update " << worst_first << " ms; 20 m slide ("
+              << before - s.local_voxels << " of " << before << " root voxels) over " << updates
+              << " updates, worst " << worst_slide << " ms; exact count of " << s.bytes / 1048576.0 << " MB in "
+              << w.elapsedMs() << " ms\n";
+    *roots_after = s.local_voxels;
+  };
+  std::size_t budgeted = 0, whole = 0;
+  time_slide(1000, &budgeted);
+  time_slide(0, &whole);
+  EXPECT_EQ(budgeted, whole);
+  // Reference: VoxelMap::removeOutsideBox (a full hash scan and all erasures in one call).
+  VoxelMap plain;
+  plain.insert(pts);
+  plain.removeOutsideBox(Vec3(130, 0, 0), 100.0);
+  Stopwatch w;
+  const std::size_t removed = plain.removeOutsideBox(Vec3(150, 0, 0), 100.0);
+  std::cout << "VoxelMap::removeOutsideBox: 20 m slide (" << removed << " root voxels) in " << w.elapsedMs() << " ms\n";
+  EXPECT_EQ(plain.numRootVoxels(), whole);
+}
