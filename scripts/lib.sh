@@ -6,11 +6,13 @@ LIVO_BUILD="${LIVO_BUILD:-$LIVO_ROOT/build}"
 LIVO_JOBS="${LIVO_JOBS:-2}"
 
 # Debian bookworm packages the suite needs to build, test and inspect (lcm.pc needs libglib2.0-dev).
+# librosbag-storage-dev: `livo-convert rosbag` (optional at build time); libsensor-msgs-dev: its tests.
 LIVO_PACKAGES=(
   build-essential cmake pkg-config ccache git
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libyaml-cpp-dev libgtest-dev
   default-jdk-headless libjchart2d-java
+  librosbag-storage-dev libsensor-msgs-dev
   iproute2 python3 python3-matplotlib
 )
 

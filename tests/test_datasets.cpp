@@ -649,9 +649,9 @@ TEST(LivoConvert, BinaryEndToEnd) {
   EXPECT_FALSE(fs::exists(bad_out));
 
   // Unknown format.
-  rc = std::system((bin + " rosbag x.bag --out " + out + " 2> " + err).c_str());
+  rc = std::system((bin + " bagfile x.bag --out " + out + " 2> " + err).c_str());
   EXPECT_NE(rc, 0);
   std::ifstream u(err);
   const std::string utext((std::istreambuf_iterator<char>(u)), std::istreambuf_iterator<char>());
-  EXPECT_TRUE(contains(utext, "unknown format 'rosbag'")) << utext;
+  EXPECT_TRUE(contains(utext, "unknown format 'bagfile'")) << utext;
 }

@@ -1,9 +1,13 @@
 // livo-convert: dataset folders to LCM logs (thin CLI around libs/datasets).
 //   livo-convert euroc DIR --out LOG.lcm [--rig RIG.yaml] [--start S] [--end S] [--imu-margin S] ...
 //   livo-convert kitti DIR --out LOG.lcm [--fields auto|xyz|xyzi] [--rate-hz HZ] [--start-time S] ...
-// Exit codes: 0 success, 1 bad input or I/O error (message names the file and line), 2 usage error.
+//   livo-convert rosbag BAG --out LOG.lcm [--lidar-topic T] [--imu-topic T] [--image-topic T] ...
+// Exit codes: 0 success, 1 bad input or I/O error (message names the file and line; a bag conversion that
+// stopped early at a corrupt chunk keeps the log of what came before), 2 usage error.
+#include "cli.hpp"
 #include "livo/datasets/euroc.hpp"
 #include "livo/datasets/kitti.hpp"
+#include "livo/datasets/rosbag.hpp"
 
 #include <unistd.h>
 
@@ -18,12 +22,18 @@
 
 namespace {
 
-const char* kUsage = R"(usage: livo-convert FORMAT DIR --out LOG.lcm [options]
+using livo_convert::parseNumber;
+using livo_convert::parseRosbagOption;
+using livo_convert::Progress;
+using livo_convert::runRosbag;
+using livo_convert::UsageError;
+
+const char* kUsage = R"(usage: livo-convert FORMAT DIR|BAG --out LOG.lcm [options]
 
 Formats:
   euroc   EuRoC/ASL folder (DIR or DIR/mav0 holding cam0/ and imu0/) -> LIVO_IMU + LIVO_CAMERA
   kitti   KITTI-style float32 .bin scans (DIR/*.bin, DIR/<sub>/points.bin, or one file) -> LIVO_LIDAR
-  (ROS bags are not supported yet.)
+  rosbag  ROS 1 bag (uncompressed, bz2 or lz4 chunks) -> LIVO_LIDAR + LIVO_IMU + LIVO_CAMERA
 
 Common options:
   --out LOG.lcm          output log (required; overwritten; removed again if the conversion fails)
@@ -50,41 +60,26 @@ kitti options:
   --synth-times M        none | azimuth: offsets of scans without time files (default none -> 0)
   --sensor NAME          lidar_scan_t.sensor (default generic)
   --lidar-channel CH     (default LIVO_LIDAR)
+
+rosbag options (times and formats: README "Running on public datasets"):
+  --lidar-topic T        sensor_msgs/PointCloud2 or livox_ros_driver(2)/CustomMsg topic
+  --imu-topic T          sensor_msgs/Imu topic
+  --image-topic T        sensor_msgs/Image or sensor_msgs/CompressedImage topic
+                         Default for each: the only topic of a matching type; "none" skips the role.
+  --sensor NAME          lidar_scan_t.sensor (default avia for Livox CustomMsg, else generic)
+  --point-time-field F   PointCloud2 per-point time field, or none (default: the first of time, t,
+                         timestamp, offset_time; integer fields are ns, floating ones s; values of 1e5 s
+                         and more are absolute times, smaller ones offsets from the header stamp)
+  --imu-accel-unit U     auto | g | mps2 (default auto: median |a| of the first 200 samples in 0.7..1.3
+                         means g, converted with --gravity)
+  --gravity G            m/s^2 per g (default 9.80665)
+  --mono16-bits B        convert mono16/16UC1 images to GRAY8 keeping the top 8 of B significant bits
+                         (9..16); default: keep GRAY16
+  --reorder-window S     seconds of sensor time an event may arrive late (default 1)
+  --max-scan-span S      skip scans whose points span more than S seconds (default 1)
+  --skip-bad             skip malformed messages (counted) instead of stopping at the first
+  --imu-channel CH, --camera-channel CH, --lidar-channel CH   output channels
 )";
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-double parseNumber(const std::string& flag, const std::string& s) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s.c_str(), &end);
-  if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(v) || errno == ERANGE)
-    throw UsageError(flag + ": expected a number, got '" + s + "'");
-  return v;
-}
-
-/// Progress on stderr: one line rewritten in place on a terminal, a line per 25 % otherwise.
-class Progress {
- public:
-  Progress(bool quiet, std::string what) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0), what_(std::move(what)) {}
-  void operator()(std::uint64_t done, std::uint64_t total) {
-    if (quiet_ || total == 0) return;
-    const int pct = static_cast<int>(100 * done / total);
-    const int step = tty_ ? 1 : 25;
-    if (pct / step == last_ / step && done != total) return;
-    last_ = pct;
-    std::fprintf(stderr, "%slivo-convert: %llu/%llu %s (%d%%)%s", tty_ ? "\r" : "",
-                 static_cast<unsigned long long>(done), static_cast<unsigned long long>(total), what_.c_str(), pct,
-                 tty_ && done != total ? "" : "\n");
-  }
-
- private:
-  bool quiet_, tty_;
-  std::string what_;
-  int last_ = -1;
-};
 
 int run(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
@@ -98,13 +93,15 @@ int run(int argc, char** argv) {
   bool quiet = false;
   livo::EurocOptions euroc;
   livo::KittiOptions kitti;
-  std::vector<std::string> euroc_only, kitti_only;
+  livo::RosbagOptions bag;
+  std::vector<std::pair<std::string, std::string>> used;  // flag, formats it applies to
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&]() -> std::string {
       if (i + 1 >= args.size()) throw UsageError(a + ": missing value");
       return args[++i];
     };
+    auto only = [&](const char* formats) { used.emplace_back(a, formats); };
     if (a.rfind("--", 0) != 0) {
       positional.push_back(a);
     } else if (a == "--out") {
@@ -112,60 +109,63 @@ int run(int argc, char** argv) {
     } else if (a == "--quiet") {
       quiet = true;
     } else if (a == "--rig") {
-      rig = value(), euroc_only.push_back(a);
+      rig = value(), only("euroc");
     } else if (a == "--start") {
-      euroc.start_s = parseNumber(a, value()), euroc_only.push_back(a);
+      euroc.start_s = parseNumber(a, value()), only("euroc");
     } else if (a == "--end") {
-      euroc.end_s = parseNumber(a, value()), euroc_only.push_back(a);
+      euroc.end_s = parseNumber(a, value()), only("euroc");
     } else if (a == "--imu-margin") {
-      euroc.imu_margin_s = parseNumber(a, value()), euroc_only.push_back(a);
+      euroc.imu_margin_s = parseNumber(a, value()), only("euroc");
     } else if (a == "--camera") {
-      euroc.camera = value(), euroc_only.push_back(a);
+      euroc.camera = value(), only("euroc");
     } else if (a == "--imu") {
-      euroc.imu = value(), euroc_only.push_back(a);
+      euroc.imu = value(), only("euroc");
     } else if (a == "--imu-channel") {
-      euroc.imu_channel = value(), euroc_only.push_back(a);
+      euroc.imu_channel = bag.imu_channel = value(), only("euroc rosbag");
     } else if (a == "--camera-channel") {
-      euroc.camera_channel = value(), euroc_only.push_back(a);
+      euroc.camera_channel = bag.camera_channel = value(), only("euroc rosbag");
     } else if (a == "--fields") {
       const std::string f = value();
       if (f == "auto") kitti.fields = livo::PointFields::Auto;
       else if (f == "xyz") kitti.fields = livo::PointFields::Xyz;
       else if (f == "xyzi") kitti.fields = livo::PointFields::Xyzi;
       else throw UsageError("--fields: expected auto, xyz or xyzi, got '" + f + "'");
-      kitti_only.push_back(a);
+      only("kitti");
     } else if (a == "--rate-hz") {
-      kitti.rate_hz = parseNumber(a, value()), kitti_only.push_back(a);
+      kitti.rate_hz = parseNumber(a, value()), only("kitti");
     } else if (a == "--start-time") {
-      kitti.start_time_s = parseNumber(a, value()), kitti_only.push_back(a);
+      kitti.start_time_s = parseNumber(a, value()), only("kitti");
     } else if (a == "--prefix") {
-      kitti.prefix = value(), kitti_only.push_back(a);
+      kitti.prefix = value(), only("kitti");
     } else if (a == "--times-prefix") {
-      kitti.times_prefix = value(), kitti_only.push_back(a);
+      kitti.times_prefix = value(), only("kitti");
     } else if (a == "--no-times") {
-      kitti.use_times = false, kitti_only.push_back(a);
+      kitti.use_times = false, only("kitti");
     } else if (a == "--synth-times") {
       const std::string m = value();
       if (m == "none") kitti.synth_times = livo::SynthTimes::None;
       else if (m == "azimuth") kitti.synth_times = livo::SynthTimes::Azimuth;
       else throw UsageError("--synth-times: expected none or azimuth, got '" + m + "'");
-      kitti_only.push_back(a);
+      only("kitti");
     } else if (a == "--sensor") {
-      kitti.sensor = value(), kitti_only.push_back(a);
+      kitti.sensor = bag.sensor = value(), only("kitti rosbag");
     } else if (a == "--lidar-channel") {
-      kitti.lidar_channel = value(), kitti_only.push_back(a);
-    } else {
+      kitti.lidar_channel = bag.lidar_channel = value(), only("kitti rosbag");
+    } else if (!parseRosbagOption(args, i, bag)) {
       throw UsageError("unknown option " + a);
+    } else {
+      only("rosbag");
     }
   }
-  if (positional.size() != 2) throw UsageError("expected FORMAT and DIR");
+  if (positional.size() != 2) throw UsageError("expected FORMAT and DIR (or BAG)");
   const std::string& format = positional[0];
   const std::string& dir = positional[1];
-  if (format != "euroc" && format != "kitti")
-    throw UsageError("unknown format '" + format + "' (known: euroc, kitti; ROS bags are not supported yet)");
+  if (format != "euroc" && format != "kitti" && format != "rosbag")
+    throw UsageError("unknown format '" + format + "' (known: euroc, kitti, rosbag)");
   if (out.empty()) throw UsageError("--out LOG.lcm is required");
-  const auto& foreign = format == "euroc" ? kitti_only : euroc_only;
-  if (!foreign.empty()) throw UsageError(foreign.front() + " does not apply to format " + format);
+  for (const auto& [flag, formats] : used)
+    if ((" " + formats + " ").find(" " + format + " ") == std::string::npos)
+      throw UsageError(flag + " does not apply to format " + format);
 
   livo::ConversionSummary summary;
   if (format == "euroc") {
@@ -177,9 +177,11 @@ int run(int argc, char** argv) {
       std::ofstream f(rig);
       if (!(f << text)) throw livo::DatasetError(rig + ": cannot write the rig config");
     }
-  } else {
+  } else if (format == "kitti") {
     kitti.progress = Progress(quiet, "scans");
     summary = livo::convertKitti(dir, out, kitti);
+  } else {
+    return runRosbag(dir, out, bag, quiet);
   }
   std::cout << "livo-convert " << format << ": " << summary.describe();
   if (!rig.empty()) std::cout << "  rig config: " << rig << "\n";

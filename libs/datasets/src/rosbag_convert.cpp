@@ -1,0 +1,212 @@
+// ROS 1 bag -> LCM log (rules in rosbag.hpp): select topics, decide the IMU acceleration unit from the
+// first samples, then decode every message and write the events in time order through a reorder window.
+#include "livo/datasets/rosbag.hpp"
+#include "livo/io/convert.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+#include <limits>
+#include <variant>
+
+namespace livo {
+
+namespace {
+
+std::string seconds(Utime t) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6f", toSeconds(t));
+  return buf;
+}
+
+/// Decoded events held until no earlier event can still arrive (utime <= newest - window), then written
+/// in (utime, arrival) order. Events older than the last written one are dropped and counted. A stamp more
+/// than kJumpUs ahead of the newest moves the window only once a second such event confirms the jump (a
+/// real gap, or a topic on another clock, whose other events are then dropped as late and counted): a
+/// single glitched stamp cannot flush, and so drop, everything else; it waits in the buffer for its turn.
+class ReorderBuffer {
+ public:
+  using Payload = std::variant<ImuSample, LidarScan, Image>;
+  static constexpr Utime kJumpUs = 10'000'000;
+  ReorderBuffer(SummaryLogWriter& out, Utime window) : out_(out), window_(window) {}
+
+  void push(const std::string* channel, Utime utime, Payload p) {
+    if (written_any_ && utime < last_written_) {
+      ++late_[*channel];
+      return;
+    }
+    if (!started_ || utime <= newest_ + kJumpUs) {
+      newest_ = started_ ? std::max(newest_, utime) : utime;
+      started_ = true;
+      if (jump_pending_ && newest_ >= jump_utime_) jump_pending_ = false;  // caught up with it
+    } else if (jump_pending_) {  // a second event beyond the jump: the stream really moved on
+      newest_ = std::max(newest_, std::min(utime, jump_utime_));
+      jump_pending_ = false;
+    } else {
+      jump_pending_ = true;
+      jump_utime_ = utime;
+    }
+    events_.emplace(std::make_pair(utime, seq_++), Event{channel, std::move(p)});
+    while (!events_.empty() && events_.begin()->first.first <= newest_ - window_) writeFirst();
+  }
+  void flushAll() {
+    while (!events_.empty()) writeFirst();
+  }
+  const std::map<std::string, std::uint64_t>& late() const { return late_; }
+
+ private:
+  struct Event {
+    const std::string* channel;
+    Payload payload;
+  };
+  void writeFirst() {
+    auto it = events_.begin();
+    std::visit([&](const auto& v) { out_.write(*it->second.channel, toMsg(v)); }, it->second.payload);
+    last_written_ = it->first.first;
+    written_any_ = true;
+    events_.erase(it);
+  }
+  SummaryLogWriter& out_;
+  Utime window_;
+  Utime newest_ = 0;
+  Utime last_written_ = 0;
+  Utime jump_utime_ = 0;
+  bool started_ = false, written_any_ = false, jump_pending_ = false;
+  std::uint64_t seq_ = 0;
+  std::map<std::pair<Utime, std::uint64_t>, Event> events_;
+  std::map<std::string, std::uint64_t> late_;
+};
+
+/// Counts of things skipped, for the warnings.
+struct Skipped {
+  std::uint64_t empty_scans = 0, long_scans = 0, untimed_scans = 0, nonfinite_points = 0, bad_messages = 0;
+  std::string long_example, bad_example;
+};
+
+std::string messageContext(const std::string& bag, const BagMessage& m) {
+  return bag + ": topic " + *m.topic + ", message " + std::to_string(m.index) + " (record time " +
+         seconds(m.bag_time) + " s): ";
+}
+
+}  // namespace
+
+std::string RosbagSummary::describe() const {
+  std::ostringstream os;
+  os << conversion.describe();
+  os << "  topics: lidar " << (topics.lidar.empty() ? "-" : topics.lidar) << ", imu "
+     << (topics.imu.empty() ? "-" : topics.imu) << ", camera " << (topics.image.empty() ? "-" : topics.image) << "\n";
+  if (!accel_note.empty()) os << "  imu: " << accel_note << "\n";
+  for (const auto& w : warnings) os << "  warning: " << w << "\n";
+  if (!error.empty()) os << "  STOPPED EARLY (the log keeps the events before this): " << error << "\n";
+  return os.str();
+}
+
+RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_log, const RosbagOptions& opt) {
+  if (!(opt.reorder_window_s >= 0) || !std::isfinite(opt.reorder_window_s))
+    throw DatasetError("--reorder-window must be a non-negative number of seconds");
+  if (!(opt.max_scan_span_s > 0)) throw DatasetError("--max-scan-span must be positive");
+  if (opt.mono16_bits != 0 && (opt.mono16_bits < 9 || opt.mono16_bits > 16))
+    throw DatasetError("--mono16-bits must be 9..16 (or 0 to keep GRAY16)");
+
+  // 1. Topics (all checks before any output exists).
+  RosbagReader bag(bag_path);
+  RosbagSummary summary;
+  summary.topics = selectRosbagTopics(bag.topics(), opt, bag_path);
+  const RosbagTopics& sel = summary.topics;
+  RosDecodeOptions dec;
+  dec.sensor = !opt.sensor.empty() ? opt.sensor : sel.lidar_type == RosType::LivoxCustomMsg ? "avia" : "generic";
+  dec.point_time_field = opt.point_time_field;
+  dec.mono16_bits = opt.mono16_bits;
+
+  // 2. IMU acceleration unit from the first samples.
+  if (!sel.imu.empty()) {
+    std::vector<double> norms;
+    if (opt.imu_accel_unit == AccelUnit::Auto) {
+      try {
+        bag.forEach({sel.imu}, [&](const BagMessage& m) {
+          try {
+            norms.push_back(decodeRosImu(m.data->data(), m.data->size()).accel.norm());
+          } catch (const DatasetError&) {  // reported by the main pass
+          }
+          return static_cast<int>(norms.size()) < opt.imu_unit_samples;
+        });
+      } catch (const BagReadError&) {  // a corrupt chunk among the first samples: the main pass reports it
+      }
+    }
+    summary.accel_scale = detectAccelScale(norms, opt, summary.accel_note);
+  }
+
+  // 3. Every message of the chosen topics, in record order, through the reorder buffer.
+  std::vector<std::string> wanted;
+  for (const std::string* t : {&sel.lidar, &sel.imu, &sel.image})
+    if (!t->empty()) wanted.push_back(*t);
+  const std::uint64_t total = bag.messageCount(wanted);
+  SummaryLogWriter out(out_log);
+  ReorderBuffer buffer(out, static_cast<Utime>(std::llround(opt.reorder_window_s * 1e6)));
+  Skipped skipped;
+  const std::int64_t max_span_ns = std::llround(opt.max_scan_span_s * 1e9);
+  auto onMessage = [&](const BagMessage& m) {
+    ++summary.messages_read;
+    const std::uint8_t* d = m.data->data();
+    const std::size_t n = m.data->size();
+    try {
+      if (*m.topic == sel.imu) {
+        ImuSample s = decodeRosImu(d, n);
+        s.accel *= summary.accel_scale;
+        buffer.push(&opt.imu_channel, s.utime, s);
+      } else if (*m.topic == sel.lidar) {
+        DecodedScan ds = sel.lidar_type == RosType::LivoxCustomMsg ? decodeLivoxCustomMsg(d, n, dec)
+                                                                   : decodeRosPointCloud2(d, n, dec);
+        skipped.nonfinite_points += ds.dropped_nonfinite;
+        if (ds.time_field.empty()) ++skipped.untimed_scans;
+        if (ds.scan.points.empty()) {
+          ++skipped.empty_scans;
+        } else if (ds.span_ns > max_span_ns) {
+          if (skipped.long_scans++ == 0)
+            skipped.long_example = messageContext(bag_path, m) + "points span " + std::to_string(ds.span_ns * 1e-9) +
+                                   " s (time field '" + ds.time_field + "')";
+        } else {
+          const Utime t = ds.scan.utime;
+          buffer.push(&opt.lidar_channel, t, std::move(ds.scan));
+        }
+      } else if (*m.topic == sel.image) {
+        Image img = sel.image_type == RosType::CompressedImage ? decodeRosCompressedImage(d, n, dec)
+                                                               : decodeRosImage(d, n, dec);
+        const Utime t = img.utime;
+        buffer.push(&opt.camera_channel, t, std::move(img));
+      }
+    } catch (const BagReadError&) {
+      throw;
+    } catch (const DatasetError& e) {
+      if (!opt.skip_bad_messages) throw DatasetError(messageContext(bag_path, m) + e.what());
+      if (skipped.bad_messages++ == 0) skipped.bad_example = messageContext(bag_path, m) + e.what();
+    }
+    if (opt.progress) opt.progress(summary.messages_read, total);
+    return true;
+  };
+  try {
+    bag.forEach(wanted, onMessage);
+  } catch (const DatasetError& e) {
+    summary.error = e.what();  // keep what was converted before it
+  }
+  buffer.flushAll();
+  summary.conversion = out.commit();
+
+  // 4. Warnings.
+  auto warn = [&](std::uint64_t count, const std::string& what) {
+    if (count > 0) summary.warnings.push_back(std::to_string(count) + " " + what);
+  };
+  for (const auto& [channel, count] : buffer.late())
+    warn(count, channel + " events arrived later than the reorder window (" + std::to_string(opt.reorder_window_s) +
+                    " s) and were dropped (use --reorder-window, or check the stamps)");
+  warn(skipped.empty_scans, "empty scans skipped");
+  warn(skipped.long_scans, "scans skipped: point times span more than " + std::to_string(opt.max_scan_span_s) +
+                               " s, wrong time unit? First: " + skipped.long_example);
+  warn(skipped.untimed_scans, "scans without a per-point time field: offsets 0 (undistortion impossible)");
+  warn(skipped.nonfinite_points, "points with non-finite coordinates dropped");
+  warn(skipped.bad_messages, "malformed messages skipped (--skip-bad). First: " + skipped.bad_example);
+  return summary;
+}
+
+}  // namespace livo
