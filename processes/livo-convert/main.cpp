@@ -36,7 +36,8 @@ Formats:
   rosbag  ROS 1 bag (uncompressed, bz2 or lz4 chunks) -> LIVO_LIDAR + LIVO_IMU + LIVO_CAMERA
 
 Common options:
-  --out LOG.lcm          output log (required; overwritten; removed again if the conversion fails)
+  --out LOG.lcm          output log (required; overwritten; removed again if the conversion fails, except
+                         a bag conversion stopped by a corrupt chunk, which keeps the events before it)
   --quiet                no progress line on stderr
   --help                 this text
 
