@@ -18,7 +18,6 @@
 #include <functional>
 #include <iosfwd>
 #include <memory>
-#include <optional>
 
 namespace livo::sim {
 
