@@ -43,6 +43,7 @@ void HybridMapConfig::load(const ConfigNode& node) {
   node.get("slide_distance_m", slide_distance_m);
   node.get("longterm_edge_m", longterm_edge_m);
   node.get("longterm_slide_m", longterm_slide_m);
+  node.get("longterm_reference_only", longterm_reference_only);
   node.get("memory_cap_mb", memory_cap_mb);
   node.get("cap_high_water", cap_high_water);
   node.get("cap_low_water", cap_low_water);

@@ -111,6 +111,11 @@ bool HybridMap::moveToLongterm(std::int64_t id, MapUpdateReport& rep) {
     ++counters_.deleted_points;
     return true;
   }
+  if (cfg_.longterm_reference_only && p->obs.size() > 1) {
+    std::vector<VisualObservation> ref{p->obs[std::size_t(p->reference)]};
+    p->obs.swap(ref);
+    p->reference = 0;
+  }
   p->obs.shrink_to_fit();
   if (!longterm_visual_.insert(std::move(p))) {
     ++rep.deleted_points;
@@ -196,74 +201,72 @@ void HybridMap::enforceCap(const Vec3& robot, MapUpdateReport& rep) {
   if (double(bytes) <= high) return;
   ++counters_.eviction_events;
 
-  // Evict by estimated sizes down to the low-water mark, then count exactly; repeat if the estimate
-  // fell short (a few rounds at most).
-  for (int round = 0; round < 4 && double(bytes) > high; ++round) {
-    double need = double(bytes) - low;
-    std::size_t evicted = 0;
+  // Evict down to the low-water mark. Sizes: exact per visual point, the bytes per root voxel of the
+  // exact count just made. Farthest first through a max-heap: O(n + k log n) for k evictions.
+  double need = double(bytes) - low;
 
-    // a) Long-term visual points, farthest first (ties: larger id first, deterministic).
-    if (need > 0 && longterm_visual_.size() > 0) {
-      std::vector<std::tuple<double, std::int64_t, std::size_t>> items;  // (dist^2, id, bytes)
-      items.reserve(longterm_visual_.size());
-      longterm_visual_.forEach([&](const VisualPoint& p) {
-        items.emplace_back((p.p_world - robot).squaredNorm(), p.id, p.bytes() + kPointOverhead);
-      });
-      std::sort(items.begin(), items.end(), [](const auto& a, const auto& b) { return a > b; });
-      for (const auto& [d2, id, b] : items) {
-        if (need <= 0) break;
-        longterm_visual_.extract(id);
-        need -= double(b);
-        ++evicted;
-        ++rep.evicted_longterm_points;
-        ++counters_.evicted_longterm_points;
-      }
+  // a) Long-term visual points, farthest first (ties: larger id first, deterministic).
+  if (longterm_visual_.size() > 0) {
+    std::vector<std::tuple<double, std::int64_t, std::size_t>> heap;  // (dist^2, id, bytes)
+    heap.reserve(longterm_visual_.size());
+    longterm_visual_.forEach([&](const VisualPoint& p) {
+      heap.emplace_back((p.p_world - robot).squaredNorm(), p.id, p.bytes() + kPointOverhead);
+    });
+    std::make_heap(heap.begin(), heap.end());
+    while (need > 0 && !heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end());
+      longterm_visual_.extract(std::get<1>(heap.back()));
+      need -= double(std::get<2>(heap.back()));
+      heap.pop_back();
+      ++rep.evicted_longterm_points;
+      ++counters_.evicted_longterm_points;
     }
-
-    // b) Local content, farthest first: root voxels (by centre) and local visual points (by position).
-    if (need > 0) {
-      struct Item {
-        double d2;
-        bool is_point;
-        VoxelKey key;
-        std::int64_t id;
-        double bytes;
-      };
-      std::vector<Item> items;
-      items.reserve(tiles_.size() + local_visual_.size());
-      const double s = lidar_.config().voxel_size_m;
-      tiles_.forEachRoot([&](const VoxelKey& k) {
-        items.push_back({(k.center(s) - robot).squaredNorm(), false, k, 0, bytes_per_root_});
-      });
-      local_visual_.forEach([&](const VisualPoint& p) {
-        items.push_back({(p.p_world - robot).squaredNorm(), true, VoxelKey{}, p.id, double(p.bytes() + kPointOverhead)});
-      });
-      std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-        if (a.d2 != b.d2) return a.d2 > b.d2;
-        if (a.is_point != b.is_point) return a.is_point;
-        return a.is_point ? a.id > b.id : std::tie(a.key.x, a.key.y, a.key.z) > std::tie(b.key.x, b.key.y, b.key.z);
-      });
-      for (const Item& it : items) {
-        if (need <= 0) break;
-        if (it.is_point) {
-          local_visual_.extract(it.id);
-          ++rep.evicted_local_points;
-          ++counters_.evicted_local_points;
-        } else {
-          lidar_.removeVoxel(it.key);
-          tiles_.remove(it.key);
-          ++rep.evicted_local_voxels;
-          ++counters_.evicted_local_voxels;
-        }
-        need -= it.bytes;
-        ++evicted;
-      }
-    }
-    bytes = recount();
-    rep.recounted = true;
-    rep.bytes = bytes;
-    if (evicted == 0) break;  // nothing left to evict: the cap cannot hold the content
   }
+
+  // b) Local content, farthest first: root voxels (by centre) and local visual points (by position).
+  if (need > 0) {
+    struct Item {
+      double d2;
+      bool is_point;
+      VoxelKey key;
+      std::int64_t id;
+      double bytes;
+      bool operator<(const Item& o) const {  // heap order: farthest on top; ties points, then larger keys
+        if (d2 != o.d2) return d2 < o.d2;
+        if (is_point != o.is_point) return !is_point;
+        return is_point ? id < o.id : std::tie(key.x, key.y, key.z) < std::tie(o.key.x, o.key.y, o.key.z);
+      }
+    };
+    std::vector<Item> heap;
+    heap.reserve(tiles_.size() + local_visual_.size());
+    const double s = lidar_.config().voxel_size_m;
+    tiles_.forEachRoot([&](const VoxelKey& k) {
+      heap.push_back({(k.center(s) - robot).squaredNorm(), false, k, 0, bytes_per_root_});
+    });
+    local_visual_.forEach([&](const VisualPoint& p) {
+      heap.push_back({(p.p_world - robot).squaredNorm(), true, VoxelKey{}, p.id, double(p.bytes() + kPointOverhead)});
+    });
+    std::make_heap(heap.begin(), heap.end());
+    while (need > 0 && !heap.empty()) {
+      std::pop_heap(heap.begin(), heap.end());
+      const Item& it = heap.back();
+      if (it.is_point) {
+        local_visual_.extract(it.id);
+        ++rep.evicted_local_points;
+        ++counters_.evicted_local_points;
+      } else {
+        lidar_.removeVoxel(it.key);
+        tiles_.remove(it.key);
+        ++rep.evicted_local_voxels;
+        ++counters_.evicted_local_voxels;
+      }
+      need -= it.bytes;
+      heap.pop_back();
+    }
+  }
+  // The per-item sizes were exact or freshly calibrated: the estimate stands for the bytes until the
+  // next exact count (no second walk).
+  rep.bytes = bytesEstimate();
 }
 
 }  // namespace livo

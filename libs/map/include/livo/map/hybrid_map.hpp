@@ -7,8 +7,8 @@
 //     are deleted; visual points whose visual voxel centre leaves it move to the long-term map;
 //     long-term points whose voxel centre is inside the new local cube move back (revisits).
 //   - long-term visual map: visual points that have a reference patch (others are dropped when they
-//     leave the local cube; their observation vectors are shrunk to size), limited to a cube of edge
-//     longterm_edge_m slid every longterm_slide_m; points leaving it are deleted.
+//     leave the local cube), keeping only that reference (longterm_reference_only), limited to a cube
+//     of edge longterm_edge_m slid every longterm_slide_m; points leaving it are deleted.
 //   - memory cap (memory_cap_mb > 0): when the accounted bytes exceed cap_high_water of the cap, the
 //     farthest long-term visual points (from the robot, Euclidean) are evicted first, then the
 //     farthest local content (LiDAR root voxels by centre and local visual points by position, in one
@@ -51,8 +51,10 @@ struct MapUpdateReport {
   std::size_t evicted_local_voxels = 0;    ///< memory cap
   std::size_t evicted_local_points = 0;    ///< memory cap
   std::size_t pending = 0;       ///< slide work left for the next updates (tiles + points)
-  bool recounted = false;        ///< an exact byte count was made
-  std::size_t bytes = 0;         ///< accounted bytes after the update (exact when recounted, else estimate)
+  bool recounted = false;        ///< an exact byte count was made (before any eviction)
+  /// Accounted bytes after the update: exact when recounted and nothing was evicted, else the O(1)
+  /// estimate (bytesEstimate(); after an eviction it is calibrated by the count just made).
+  std::size_t bytes = 0;
   double ms = 0.0;               ///< wall time of the update
 };
 
@@ -180,6 +182,7 @@ class HybridMap {
   VisualMap local_visual_;
   VisualMap longterm_visual_;
   RootTileIndex tiles_;
+  std::vector<PointWithCov> index_scratch_;  ///< one-point batch for insertLidar
 
   bool started_ = false;
   Vec3 local_center_ = Vec3::Zero();

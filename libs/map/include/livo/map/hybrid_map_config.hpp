@@ -29,6 +29,9 @@ struct HybridMapConfig {
   // Long-term visual map: visual points that left the local cube (paper: edge 800 m, slid every 100 m).
   double longterm_edge_m = 800.0;   ///< edge of the long-term cube, m (>= local_edge_m)
   double longterm_slide_m = 100.0;  ///< long-term slide distance, m
+  /// A point moving to the long-term map keeps only its reference observation (one patch pyramid,
+  /// about 2.2 kB per point instead of up to max_observations times that); false keeps them all.
+  bool longterm_reference_only = true;
 
   // Memory budget (hybrid mode only).
   double memory_cap_mb = 0.0;  ///< cap on the accounted bytes of all map structures, MiB; 0 = none
