@@ -10,7 +10,8 @@ void VioConfig::load(const ConfigNode& root) {
   const ConfigNode n = root.section("vio");
   n.get("max_iterations", max_iterations).get("outlier_rms", outlier_rms);
   n.get("estimate_exposure", estimate_exposure).get("normal_warp", normal_warp);
-  n.get("converge_rot_deg", converge_rot_deg).get("converge_pos_m", converge_pos_m);
+  n.get("converge_rot_deg", converge_rot_deg).get("converge_pos_m", converge_pos_m).get("model_noise", model_noise);
+  n.check(model_noise >= 0, "model_noise", "must be >= 0");
   n.check(max_iterations >= 1 && max_iterations <= 50, "max_iterations", "must be in 1..50");
   n.check(outlier_rms > 0, "outlier_rms", "must be > 0");
   n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
@@ -214,7 +215,7 @@ VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const 
 
   // 2. Coarse to fine: iterated updates per level, information form over [dtheta, dp, dtau] (the
   //    first 7 error-state entries), rolling back an iteration that raises the mean squared error.
-  const double inv_var = 1.0 / (cfg.pixel_noise * cfg.pixel_noise);
+  const double inv_var = 1.0 / cfg.residualVariance();
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
   StateCov K_bar = P_prop;
   bool have_K = false;

@@ -15,7 +15,12 @@ namespace livo {
 
 struct VioConfig {
   int max_iterations = 5;          ///< per pyramid level
-  double pixel_noise = 3.0;        ///< photometric sigma, gray levels (camera.pixel_noise)
+  double pixel_noise = 3.0;        ///< sensor noise sigma, gray levels (camera.pixel_noise)
+  /// Photometric model error added in quadrature to the sensor noise, gray levels: bilinear sampling,
+  /// the affine warp and lighting make patches differ by more than the pixel noise. FAST-LIVO2's
+  /// img_point_cov 100 is a sigma of 10. On the simulator 8 beats the bare pixel noise (2): room
+  /// 6.1 -> 4.8 mm, corridor 7.2 -> 3.8 mm, street 10.7 -> 5.5 cm ATE.
+  double model_noise = 8.0;
   double outlier_rms = 30.0;       ///< a point whose level-0 RMS error exceeds this is not used, gray levels
   bool estimate_exposure = true;   ///< tau in the state (else held)
   bool normal_warp = true;         ///< affine warp from the plane normal (else identity)
@@ -24,6 +29,8 @@ struct VioConfig {
 
   /// Reads the `vio` section (and pixel_noise from `camera`).
   void load(const ConfigNode& root);
+  /// Residual variance used by the update, gray levels^2.
+  double residualVariance() const { return pixel_noise * pixel_noise + model_noise * model_noise; }
 };
 
 struct VioUpdateResult {
