@@ -33,8 +33,10 @@ struct SensorStream {
 constexpr Utime kStreamT0 = 1'000'000'000;  // 1000 s
 
 /// IMU at 200 Hz, LiDAR scans of `points_per_scan` points at 10 Hz (each spanning 0.1 s, published
-/// at its end), RGB8 images of 40 x 30 at 10 Hz, 50 ms after each scan start; `duration_s` long.
-inline SensorStream makeSensorStream(double duration_s = 2.0, int points_per_scan = 200) {
+/// at its end), RGB8 images of `width` x `height` at 10 Hz, 50 ms after each scan start; `duration_s`
+/// long.
+inline SensorStream makeSensorStream(double duration_s = 2.0, int points_per_scan = 200, int width = 40,
+                                     int height = 30) {
   SensorStream s;
   s.t0 = kStreamT0;
   const Utime dur = Utime(std::llround(duration_s * 1e6));
@@ -63,15 +65,15 @@ inline SensorStream makeSensorStream(double duration_s = 2.0, int points_per_sca
   for (Utime t = s.t0 + 50000; t + 50000 <= s.t0 + dur; t += 100000) {
     Image img;
     img.utime = t;
-    img.width = 40;
-    img.height = 30;
-    img.row_stride = 120;
+    img.width = width;
+    img.height = height;
+    img.row_stride = 3 * width;
     img.format = PixelFormat::Rgb8;
     img.data.assign(std::size_t(img.row_stride) * img.height, 0);
     for (int v = 0; v < img.height; ++v)
       for (int u = 0; u < img.width; ++u) {
         std::uint8_t* px = &img.data[std::size_t(v * img.row_stride + 3 * u)];
-        px[0] = std::uint8_t(4 * u);  // red ramp, green and blue 100
+        px[0] = std::uint8_t((4 * u) & 0xFF);  // red ramp, green and blue 100
         px[1] = 100;
         px[2] = 100;
       }

@@ -3,6 +3,7 @@
 // (one process, no network): frames at the image times, bad messages counted, output files equal to
 // livo-run's (RunOutputs), map.pcd coloured where the camera saw the points (read back with PCL),
 // map.bt occupied at the points and free along the rays (read back with OctoMap).
+#include "livo/common/timing.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/io/run_outputs.hpp"
 #include "livo/process/cli.hpp"
@@ -33,8 +34,18 @@ namespace fs = std::filesystem;
 
 namespace {
 
+fs::path tempRoot() { return fs::temp_directory_path() / ("livo_test_process_" + std::to_string(::getpid())); }
+
+/// Removes the temporary files of this run when every test passed (kept for inspection otherwise).
+struct TempCleanup : testing::Environment {
+  void TearDown() override {
+    if (testing::UnitTest::GetInstance()->Passed()) fs::remove_all(tempRoot());
+  }
+};
+[[maybe_unused]] testing::Environment* const kTempCleanup = testing::AddGlobalTestEnvironment(new TempCleanup);
+
 std::string tempDir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("livo_test_process_" + std::to_string(::getpid())) / name;
+  const fs::path p = tempRoot() / name;
   fs::remove_all(p);
   fs::create_directories(p);
   return p.string();
@@ -608,5 +619,83 @@ TEST(MapCloud, CapOnPointsAndNonFiniteInputAreCounted) {
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("exporter.map_voxel_m"), std::string::npos) << e.what();
+  }
+}
+
+// ---------------------------------------------------------------- speed (opt-in)
+// ./test_process --gtest_also_run_disabled_tests --gtest_filter='*Speed*'
+
+TEST(ProcessSpeed, DISABLED_PreprocessFramesPerSecond) {
+  // Avia-like input: 24,000 points per 0.1 s scan, 640 x 512 RGB8 images at 10 Hz, IMU at 200 Hz.
+  const test::SensorStream stream = test::makeSensorStream(5.0, 24000, 640, 512);
+  std::size_t bytes = 0;
+  for (const auto& ev : stream.events) bytes += ev.bytes.size();
+  LcmNode lcm("memq://", "livo-preprocess", nullptr);
+  std::size_t frames = 0;
+  lcm.subscribeRaw("LIVO_FRAME", [&](const void*, std::size_t) {
+    ++frames;
+    return Validation::ok();
+  });
+  PreprocessNode node(lcm, cameraConfig(), ChannelConfig{}, nullptr);
+  Stopwatch watch;
+  for (const auto& ev : stream.events) {
+    lcm.dispatch(ev.channel, ev.bytes.data(), ev.bytes.size());  // decode, convert, recombine, encode
+    lcm.drain();                                                 // the published frames
+  }
+  node.finish();
+  lcm.drain();
+  const double s = watch.elapsedMs() / 1000.0;
+  std::printf("preprocess: %zu frames in %.3f s = %.1f frames/s (%.1f MB/s of input, %.1f x real time)\n", frames, s,
+              double(frames) / s, double(bytes) / 1e6 / s, 5.0 / s);
+  EXPECT_EQ(frames, stream.image_times.size() + 1);
+}
+
+TEST(ProcessSpeed, DISABLED_ExporterMsPerRegisteredScan) {
+  // A sensor moving through a 20 x 8 x 3 m box; 5,000 world points per frame on its walls, 50 frames,
+  // inserted in the caller's thread (octomap_queue_scans 0) to time the ray casting.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<OdometryOutput> odoms;
+  std::vector<RegisteredScan> scans;
+  for (int k = 0; k < 50; ++k) {
+    OdometryOutput o;
+    o.utime = o.state.utime = test::kStreamT0 + 100000 * k;
+    o.state.p_world_imu = Eigen::Vector3d(1.0 + 0.3 * k, 4.0, 1.5);
+    RegisteredScan s;
+    s.utime = o.utime;
+    for (int i = 0; i < 5000; ++i) {
+      const float a = u(rng), b = u(rng);
+      Eigen::Vector3f p;
+      switch (i % 4) {
+        case 0: p = {20.0f * a, 0.0f, 3.0f * b}; break;
+        case 1: p = {20.0f * a, 8.0f, 3.0f * b}; break;
+        case 2: p = {20.0f * a, 8.0f * b, 0.0f}; break;
+        default: p = {20.0f, 8.0f * a, 3.0f * b}; break;
+      }
+      s.points.push_back(p);
+      s.intensity.push_back(50.0f);
+      s.rgb.push_back(i % 2 ? 0x808080 : -1);
+    }
+    odoms.push_back(o);
+    scans.push_back(std::move(s));
+  }
+  for (double res : {0.3, 0.2, 0.1}) {
+    const std::string dir = tempDir("exporter_speed");
+    LcmNode lcm("memq://", "livo-exporter", nullptr);
+    MapExportConfig cfg;
+    cfg.octomap_resolution_m = res;
+    cfg.octomap_queue_scans = 0;
+    ExporterNode node(lcm, ChannelConfig{}, cfg, dir, nullptr);
+    Stopwatch watch;
+    for (std::size_t k = 0; k < odoms.size(); ++k) {
+      node.onOdometry(odoms[k]);
+      node.onRegisteredScan(scans[k]);
+    }
+    const double per_scan = watch.elapsedMs() / double(odoms.size());
+    Stopwatch finish;
+    node.finish();
+    std::printf("exporter: octomap %.1f m: %.2f ms per registered scan of 5000 points (voxel map + rays); finish "
+                "(stats.json, map.pcd %zu points, map.bt %zu leaves) %.1f ms\n",
+                res, per_scan, node.mapCloud().size(), node.occupancy().leafCount(), finish.elapsedMs());
   }
 }

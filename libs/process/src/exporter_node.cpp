@@ -171,7 +171,6 @@ void ExporterNode::finish() {
   counters_["map_pcd_points"] = double(cloud_.size());
   counters_["map_pcd_points_colored"] = double(cloud_.voxelsColored());
   counters_["map_points_dropped"] = double(cloud_.pointsDropped());
-  counters_["octomap_scans"] = double(occupancy_.scansInserted());
 
   const std::string& dir = outputs_.dir();
   std::map<std::string, std::string> notes{{"source", "livo-exporter"},
@@ -179,8 +178,10 @@ void ExporterNode::finish() {
   if (!map_stats_) notes["map_stats"] = "no map_stats_t received: map section is zero";
   cloud_.writePcd(dir + "/map.pcd");
   if (cfg_.octomap_enabled) {
-    occupancy_.writeBt(dir + "/map.bt");
+    occupancy_.writeBt(dir + "/map.bt");  // after the worker's queue is empty
     counters_["octomap_leaves"] = double(occupancy_.leafCount());
+    counters_["octomap_scans"] = double(occupancy_.scansInserted());
+    counters_["octomap_scans_dropped"] = double(occupancy_.scansDropped());
   }
   outputs_.writeStats(ms, bytesToMb(peakRssBytes()), counters_, notes);
 }

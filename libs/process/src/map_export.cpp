@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <sstream>
 #include <stdexcept>
 
 namespace livo {
@@ -18,12 +20,14 @@ void MapExportConfig::load(const ConfigNode& n) {
   n.get("map_voxel_m", map_voxel_m).get("max_map_points", max_map_points).get("intensity_max", intensity_max);
   n.get("octomap_enabled", octomap_enabled).get("octomap_resolution_m", octomap_resolution_m);
   n.get("octomap_max_range_m", octomap_max_range_m).get("octomap_every_n", octomap_every_n);
+  n.get("octomap_queue_scans", octomap_queue_scans);
   n.check(map_voxel_m > 0.0, "map_voxel_m", "must be > 0 m");
   n.check(max_map_points > 0, "max_map_points", "must be > 0");
   n.check(intensity_max >= 0.0, "intensity_max", "must be >= 0 (0: automatic)");
   n.check(octomap_resolution_m > 0.0, "octomap_resolution_m", "must be > 0 m");
   n.check(octomap_max_range_m > 0.0, "octomap_max_range_m", "must be > 0 m");
   n.check(octomap_every_n >= 1, "octomap_every_n", "must be >= 1");
+  n.check(octomap_queue_scans >= 0, "octomap_queue_scans", "must be >= 0 (0: no worker thread)");
 }
 
 void MapExportConfig::validate() const {
@@ -36,6 +40,7 @@ void MapExportConfig::validate() const {
   need(std::isfinite(octomap_resolution_m) && octomap_resolution_m > 0.0, "octomap_resolution_m must be > 0");
   need(std::isfinite(octomap_max_range_m) && octomap_max_range_m > 0.0, "octomap_max_range_m must be > 0");
   need(octomap_every_n >= 1, "octomap_every_n must be >= 1");
+  need(octomap_queue_scans >= 0, "octomap_queue_scans must be >= 0");
 }
 
 // ---------------------------------------------------------------- map.pcd
@@ -156,28 +161,96 @@ void MapCloud::writePcd(const std::string& path) const {
 OccupancyMap::OccupancyMap(const MapExportConfig& cfg)
     : cfg_(cfg), tree_(std::make_unique<octomap::OcTree>(cfg.octomap_resolution_m)) {
   cfg_.validate();
+  if (cfg_.octomap_queue_scans > 0) worker_ = std::thread([this] { workerLoop(); });
 }
 
-OccupancyMap::~OccupancyMap() = default;
+OccupancyMap::~OccupancyMap() {
+  if (worker_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      quit_ = true;
+    }
+    wake_.notify_all();
+    worker_.join();
+  }
+}
 
 void OccupancyMap::insertScan(const Eigen::Vector3d& p_world_sensor, const std::vector<Eigen::Vector3f>& p_world) {
   if ((calls_++ % std::uint64_t(cfg_.octomap_every_n)) != 0) return;
   if (!p_world_sensor.allFinite()) return;
+  if (!worker_.joinable()) {
+    insertNow(Job{p_world_sensor, p_world});
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (jobs_.size() >= std::size_t(cfg_.octomap_queue_scans)) {  // the worker is behind: drop the oldest
+      jobs_.pop_front();
+      ++dropped_;
+    }
+    jobs_.push_back(Job{p_world_sensor, p_world});
+  }
+  wake_.notify_one();
+}
+
+void OccupancyMap::insertNow(const Job& job) {
   octomap::Pointcloud cloud;
-  cloud.reserve(p_world.size());
-  for (const auto& p : p_world)
+  cloud.reserve(job.points.size());
+  for (const auto& p : job.points)
     if (p.allFinite()) cloud.push_back(p.x(), p.y(), p.z());
-  const octomap::point3d origin(float(p_world_sensor.x()), float(p_world_sensor.y()), float(p_world_sensor.z()));
+  const octomap::point3d origin(float(job.origin.x()), float(job.origin.y()), float(job.origin.z()));
   // discretize: one ray per end voxel (the scans are already downsampled; this removes duplicates).
   tree_->insertPointCloud(cloud, origin, cfg_.octomap_max_range_m, /*lazy_eval=*/false, /*discretize=*/true);
   ++inserted_;
 }
 
-std::size_t OccupancyMap::leafCount() const { return tree_->getNumLeafNodes(); }
+void OccupancyMap::workerLoop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    wake_.wait(lock, [this] { return quit_ || !jobs_.empty(); });
+    if (jobs_.empty()) return;  // quit_ and nothing left
+    Job job = std::move(jobs_.front());
+    jobs_.pop_front();
+    busy_ = true;
+    lock.unlock();
+    insertNow(job);
+    lock.lock();
+    busy_ = false;
+    if (jobs_.empty()) idle_.notify_all();
+  }
+}
+
+void OccupancyMap::waitIdle() {
+  if (!worker_.joinable()) return;
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return jobs_.empty() && !busy_; });
+}
+
+std::size_t OccupancyMap::leafCount() {
+  waitIdle();
+  return tree_->getNumLeafNodes();
+}
+
+const octomap::OcTree& OccupancyMap::tree() {
+  waitIdle();
+  return *tree_;
+}
 
 void OccupancyMap::writeBt(const std::string& path) {
+  waitIdle();
   const std::string tmp = path + ".tmp";
-  if (!tree_->writeBinary(tmp)) throw std::runtime_error(tmp + ": OctoMap could not write the tree");
+  // OctoMap reports progress on std::cout; the processes keep stdout for their summary.
+  struct MuteCout {
+    std::ostringstream sink;
+    std::streambuf* saved = std::cout.rdbuf(sink.rdbuf());
+    ~MuteCout() { std::cout.rdbuf(saved); }
+  };
+  bool ok = false;
+  {
+    MuteCout mute;
+    ok = tree_->writeBinary(tmp);
+  }
+  if (!ok) throw std::runtime_error(tmp + ": OctoMap could not write the tree");
   renameOrThrow(tmp, path);
 }
 

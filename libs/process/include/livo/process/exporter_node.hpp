@@ -48,7 +48,7 @@ class ExporterNode {
 
   const RunOutputs& outputs() const { return outputs_; }
   const MapCloud& mapCloud() const { return cloud_; }
-  const OccupancyMap& occupancy() const { return occupancy_; }
+  OccupancyMap& occupancy() { return occupancy_; }
   const std::map<std::string, double>& counters() const { return counters_; }
 
  private:

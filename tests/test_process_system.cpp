@@ -1,0 +1,335 @@
+// The process suite as processes: the built livo-preprocess and livo-exporter binaries fed by
+// lcm-logplayer inside a private network namespace (no traffic leaves its loopback device; skipped when
+// not root or without `ip netns`), their command-line errors, and procman/run-local (starts a group of
+// a .pmd, restarts a killed command, stops everything on SIGTERM; resolves livo.pmd's commands).
+// livo-test-bins: livo-preprocess livo-exporter
+#include "livo/eval/tum.hpp"
+#include "livo/io/convert.hpp"
+#include "livo/io/log.hpp"
+
+#include "process_test_streams.hpp"
+
+#include <octomap/OcTree.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <sys/wait.h>
+#include <thread>
+#include <unistd.h>
+
+using namespace livo;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kBin = std::string(LIVO_BINARY_DIR) + "/bin";
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+fs::path tempRoot() { return fs::temp_directory_path() / ("livo_test_procsys_" + std::to_string(::getpid())); }
+
+/// Removes the temporary files of this run when every test passed (kept for inspection otherwise).
+struct TempCleanup : testing::Environment {
+  void TearDown() override {
+    if (testing::UnitTest::GetInstance()->Passed()) fs::remove_all(tempRoot());
+  }
+};
+[[maybe_unused]] testing::Environment* const kTempCleanup = testing::AddGlobalTestEnvironment(new TempCleanup);
+
+std::string tempDir(const std::string& name) {
+  const fs::path p = tempRoot() / name;
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p.string();
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::size_t countLines(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string l; std::getline(in, l);) n += !l.empty();
+  return n;
+}
+
+void sleepS(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
+/// A child process with stdout and stderr in `log_path`.
+struct Child {
+  pid_t pid = -1;
+  int status = -1;
+  Child(const std::vector<std::string>& argv, const std::string& log_path) {
+    pid = ::fork();
+    if (pid == 0) {
+      const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (fd >= 0) {
+        ::dup2(fd, 1);
+        ::dup2(fd, 2);
+      }
+      std::vector<char*> args;
+      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      ::execvp(args[0], args.data());
+      ::_exit(127);
+    }
+  }
+  /// Waits up to `timeout_s` (then SIGKILL); returns the exit code, or -signal.
+  int wait(double timeout_s) {
+    if (pid <= 0) return status;
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < end) {
+      int st = 0;
+      if (::waitpid(pid, &st, WNOHANG) == pid) {
+        pid = -1;
+        return status = WIFEXITED(st) ? WEXITSTATUS(st) : -WTERMSIG(st);
+      }
+      sleepS(0.02);
+    }
+    ::kill(pid, SIGKILL);
+    int st = 0;
+    ::waitpid(pid, &st, 0);
+    pid = -1;
+    return status = 1000;  // timed out
+  }
+  void signal(int sig) const {
+    if (pid > 0) ::kill(pid, sig);
+  }
+  ~Child() {
+    if (pid > 0) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, nullptr, 0);
+    }
+  }
+};
+
+/// A private network namespace with multicast on its loopback device; `why` says why not.
+struct Netns {
+  std::string name = "livo_test_" + std::to_string(::getpid());
+  bool ok = false;
+  std::string why;
+  Netns() {
+    if (::geteuid() != 0) {
+      why = "not root: cannot create a network namespace";
+      return;
+    }
+    if (std::system(("ip netns add " + name + " 2>/dev/null").c_str()) != 0) {
+      why = "'ip netns add' failed (no iproute2 or no namespace support)";
+      return;
+    }
+    ok = std::system(("ip netns exec " + name + " ip link set lo up multicast on && ip netns exec " + name +
+                      " ip route add 224.0.0.0/4 dev lo")
+                         .c_str()) == 0;
+    if (!ok) why = "could not enable multicast on the namespace's loopback device";
+  }
+  ~Netns() {
+    if (::geteuid() == 0) (void)std::system(("ip netns del " + name + " 2>/dev/null").c_str());
+  }
+  std::vector<std::string> exec(std::vector<std::string> argv) const {
+    argv.insert(argv.begin(), {"ip", "netns", "exec", name});
+    return argv;
+  }
+};
+
+bool haveTool(const std::string& tool) { return std::system(("command -v " + tool + " >/dev/null 2>&1").c_str()) == 0; }
+
+}  // namespace
+
+// ---------------------------------------------------------------- command line of the binaries
+
+TEST(ProcessBinaries, HelpAndErrorsNameTheProblem) {
+  const std::string dir = tempDir("cli");
+  auto run = [&](const std::string& cmd) {
+    const int rc = std::system((cmd + " > " + dir + "/out.txt 2>&1").c_str());
+    return std::make_pair(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFile(dir + "/out.txt"));
+  };
+  auto [rc, out] = run(kBin + "/livo-preprocess --help");
+  EXPECT_EQ(rc, 0);
+  EXPECT_NE(out.find("--lcm-url URL"), std::string::npos) << out;
+  std::tie(rc, out) = run(kBin + "/livo-exporter --config x.yaml");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("--out is required"), std::string::npos) << out;
+  std::ofstream(dir + "/typo.yaml") << "preprocess:\n  wait_timout_s: 1.0\n";
+  std::tie(rc, out) = run(kBin + "/livo-preprocess --config " + dir + "/typo.yaml --lcm-url memq://");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("preprocess.wait_timout_s: unknown key"), std::string::npos) << out;
+  std::ofstream(dir + "/bad.yaml") << "exporter:\n  octomap_resolution_m: 0\n";
+  std::tie(rc, out) = run(kBin + "/livo-exporter --config " + dir + "/bad.yaml --out " + dir + "/o --lcm-url memq://");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("exporter.octomap_resolution_m"), std::string::npos) << out;
+  std::tie(rc, out) = run(kBin + "/livo-preprocess --config " + dir + "/bad.yaml --lcm-url 'bogus://'");
+  EXPECT_EQ(rc, 1);
+  EXPECT_NE(out.find("cannot open LCM URL 'bogus://'"), std::string::npos) << out;
+}
+
+// ---------------------------------------------------------------- processes in a network namespace
+
+TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
+  Netns ns;
+  if (!ns.ok) GTEST_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) GTEST_SKIP() << "lcm-logplayer / lcm-logger missing";
+  const std::string dir = tempDir("preprocess");
+  const test::SensorStream stream = test::makeSensorStream(2.0);
+  {
+    LogWriter w(dir + "/in.lcm");
+    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
+  }
+  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+
+  Child logger(ns.exec({"lcm-logger", "-f", "-q", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
+               dir + "/logger.txt");
+  Child pre(ns.exec({kBin + "/livo-preprocess", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--idle-exit",
+                     "2", "--report-interval", "1"}),
+            dir + "/preprocess.txt");
+  sleepS(1.0);  // both subscribed
+  Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=2", dir + "/in.lcm"}), dir + "/player.txt");
+  EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
+  EXPECT_EQ(pre.wait(60), 0) << readFile(dir + "/preprocess.txt");  // --idle-exit: flushes, then exits
+  sleepS(0.5);
+  logger.signal(SIGINT);
+  logger.wait(30);
+
+  const std::string out = readFile(dir + "/preprocess.txt");
+  EXPECT_NE(out.find("frames published 21 (20 with image"), std::string::npos) << out;
+  EXPECT_NE(out.find("no message for --idle-exit seconds"), std::string::npos) << out;
+  EXPECT_NE(out.find("livo-preprocess: t "), std::string::npos) << out;  // periodic counters
+
+  std::set<Utime> expected(stream.image_times.begin(), stream.image_times.end());
+  LogReader reader(dir + "/out.lcm");
+  LogEvent ev;
+  std::vector<Utime> got;
+  while (reader.next(ev)) {
+    ASSERT_EQ(ev.channel, "LIVO_FRAME");
+    livo::frame_t m;
+    Frame f;
+    ASSERT_TRUE(decode(ev.data.data(), ev.data.size(), m) && fromMsg(m, f));
+    if (f.has_image) {
+      EXPECT_TRUE(expected.count(f.utime)) << f.utime;
+      EXPECT_EQ(f.image.format, PixelFormat::Gray8);
+    }
+    got.push_back(f.utime);
+  }
+  EXPECT_EQ(got.size(), 21u);
+  EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
+}
+
+TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
+  Netns ns;
+  if (!ns.ok) GTEST_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  const std::string dir = tempDir("exporter");
+  const auto frames = test::makeEstimatorFrames(20);
+  {
+    LogWriter w(dir + "/est.lcm");
+    for (const auto& f : frames) {
+      w.write("LIVO_ODOMETRY", f.odom.utime, toMsg(f.odom));
+      w.write("LIVO_REGISTERED_SCAN", f.odom.utime + 10, toMsg(f.scan));
+      w.write("LIVO_ESTIMATOR_STATS", f.odom.utime + 20, toMsg(f.stats));
+      if (f.has_map_stats) w.write("LIVO_MAP_STATS", f.odom.utime + 30, toMsg(f.map_stats));
+    }
+  }
+  std::ofstream(dir + "/rig.yaml") << "exporter: {map_voxel_m: 0.05, octomap_resolution_m: 0.1}\n";
+  Child exporter(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out",
+                          dir + "/out"}),
+                 dir + "/exporter.txt");
+  sleepS(1.0);
+  Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=2", dir + "/est.lcm"}), dir + "/player.txt");
+  EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
+  sleepS(0.5);
+  // Before the stop: the trajectory is on disk already.
+  EXPECT_EQ(countLines(dir + "/out/trajectory.tum"), 20u);  // '#' header + 19 poses
+  exporter.signal(SIGINT);
+  EXPECT_EQ(exporter.wait(60), 0) << readFile(dir + "/exporter.txt");
+  const std::string log = readFile(dir + "/exporter.txt");
+  EXPECT_NE(log.find("Interrupt"), std::string::npos) << log;
+  EXPECT_NE(log.find("frames 20 (poses 19"), std::string::npos) << log;
+
+  EXPECT_EQ(readTum(dir + "/out/trajectory.tum").size(), 19u);
+  EXPECT_EQ(countLines(dir + "/out/frames.csv"), 21u);
+  EXPECT_NE(readFile(dir + "/out/stats.json").find("\"frames\": 20"), std::string::npos);
+  pcl::PointCloud<pcl::PointXYZRGB> cloud;
+  ASSERT_EQ(pcl::io::loadPCDFile(dir + "/out/map.pcd", cloud), 0);
+  EXPECT_GT(cloud.size(), 400u);
+  octomap::OcTree tree(0.1);
+  ASSERT_TRUE(tree.readBinary(dir + "/out/map.bt"));
+  const octomap::OcTreeNode* n = tree.search(5.0, 0.3, 1.0);
+  ASSERT_NE(n, nullptr);
+  EXPECT_TRUE(tree.isNodeOccupied(n));
+}
+
+// ---------------------------------------------------------------- procman/run-local
+
+TEST(RunLocal, StartsAGroupRestartsACrashedCommandAndStopsAllOnSigterm) {
+  if (!haveTool("python3")) GTEST_SKIP() << "python3 missing";
+  const std::string dir = tempDir("runlocal");
+  // Each command appends its pid to a file, then becomes `sleep` (same pid).
+  auto cmd = [&](const std::string& name) {
+    return "    cmd \"" + name + "\" {\n        exec = \"bash -c 'echo $$ >> ${DIR}/" + name +
+           ".pids; exec sleep 600'\";\n        host = \"localhost\";\n    }\n";
+  };
+  std::ofstream(dir + "/test.pmd") << "# @default DIR = \"/nonexistent\";\n"
+                                   << "group \"dummies\" {\n" << cmd("a") << cmd("b") << "}\n"
+                                   << "group \"other\" {\n" << cmd("c") << "}\n";
+  Child rl({std::string(LIVO_SOURCE_DIR) + "/procman/run-local", "dummies", "--pmd", dir + "/test.pmd", "--var",
+            "DIR=" + dir},
+           dir + "/run-local.txt");
+  auto waitLines = [&](const std::string& f, std::size_t n) {
+    for (int i = 0; i < 500 && countLines(f) < n; ++i) sleepS(0.02);
+    return countLines(f);
+  };
+  ASSERT_EQ(waitLines(dir + "/a.pids", 1), 1u) << readFile(dir + "/run-local.txt");
+  ASSERT_EQ(waitLines(dir + "/b.pids", 1), 1u) << readFile(dir + "/run-local.txt");
+  EXPECT_FALSE(fs::exists(dir + "/c.pids"));  // not in the group
+  const pid_t a1 = std::stoi(readFile(dir + "/a.pids"));
+  ASSERT_EQ(::kill(a1, SIGKILL), 0);
+  ASSERT_EQ(waitLines(dir + "/a.pids", 2), 2u) << readFile(dir + "/run-local.txt");  // restarted after 1 s
+  EXPECT_EQ(countLines(dir + "/b.pids"), 1u);                                          // b untouched
+  rl.signal(SIGTERM);
+  EXPECT_EQ(rl.wait(30), 0) << readFile(dir + "/run-local.txt");
+  std::ifstream a(dir + "/a.pids"), b(dir + "/b.pids");
+  for (std::istream* in : {static_cast<std::istream*>(&a), static_cast<std::istream*>(&b)})
+    for (pid_t pid; *in >> pid;) EXPECT_TRUE(::kill(pid, 0) != 0 && errno == ESRCH) << "pid " << pid << " alive";
+  const std::string log = readFile(dir + "/run-local.txt");
+  EXPECT_NE(log.find("a killed by signal 9"), std::string::npos) << log;
+  EXPECT_NE(log.find("all stopped"), std::string::npos) << log;
+}
+
+TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
+  if (!haveTool("python3")) GTEST_SKIP() << "python3 missing";
+  const std::string dir = tempDir("runlocal_pmd");
+  const std::string rl = std::string(LIVO_SOURCE_DIR) + "/procman/run-local";
+  int rc = std::system((rl + " replay --dry-run --var LIVO_BIN=" + kBin + " --var LOG=my.lcm > " + dir +
+                        "/cmds.txt 2>&1")
+                           .c_str());
+  ASSERT_EQ(rc, 0) << readFile(dir + "/cmds.txt");
+  const std::string cmds = readFile(dir + "/cmds.txt");
+  for (const std::string& needle : std::vector<std::string>{kBin + "/livo-preprocess --config ", kBin + "/livo-estimator --config ", " --memory-cap-mb 512 --map-file ",
+        kBin + "/livo-exporter --config ", " --out livo_out", "lcm-logplayer ", " my.lcm",
+        "--lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'"})
+    EXPECT_NE(cmds.find(needle), std::string::npos) << needle << "\n" << cmds;
+  // The binaries this suite builds exist where livo.pmd says.
+  EXPECT_TRUE(fs::exists(kBin + "/livo-preprocess"));
+  EXPECT_TRUE(fs::exists(kBin + "/livo-exporter"));
+  // Without LOG the replay script names the missing variable; a bad file names its line.
+  rc = std::system((rl + " replay --dry-run > " + dir + "/err.txt 2>&1").c_str());
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(readFile(dir + "/err.txt").find("variable LOG is not set"), std::string::npos) << readFile(dir + "/err.txt");
+  std::ofstream(dir + "/bad.pmd") << "cmd \"x\" {\n  exec = \"true\";\n  hots = \"localhost\";\n}\n";
+  rc = std::system((rl + " x --pmd " + dir + "/bad.pmd > " + dir + "/err2.txt 2>&1").c_str());
+  EXPECT_NE(rc, 0);
+  EXPECT_NE(readFile(dir + "/err2.txt").find("bad.pmd:3: unknown attribute 'hots'"), std::string::npos)
+      << readFile(dir + "/err2.txt");
+}
