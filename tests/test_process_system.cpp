@@ -7,6 +7,7 @@
 #include "livo/io/convert.hpp"
 #include "livo/io/log.hpp"
 
+#include "process_test_files.hpp"
 #include "process_test_streams.hpp"
 
 #include <octomap/OcTree.h>
@@ -28,43 +29,15 @@
 #include <unistd.h>
 
 using namespace livo;
+using test::countLines;
+using test::readFile;
+using test::tempDir;
 namespace fs = std::filesystem;
 
 namespace {
 
 const std::string kBin = std::string(LIVO_BINARY_DIR) + "/bin";
 const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
-
-fs::path tempRoot() { return fs::temp_directory_path() / ("livo_test_procsys_" + std::to_string(::getpid())); }
-
-/// Removes the temporary files of this run when every test passed (kept for inspection otherwise).
-struct TempCleanup : testing::Environment {
-  void TearDown() override {
-    if (testing::UnitTest::GetInstance()->Passed()) fs::remove_all(tempRoot());
-  }
-};
-[[maybe_unused]] testing::Environment* const kTempCleanup = testing::AddGlobalTestEnvironment(new TempCleanup);
-
-std::string tempDir(const std::string& name) {
-  const fs::path p = tempRoot() / name;
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p.string();
-}
-
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-std::size_t countLines(const std::string& path) {
-  std::ifstream in(path);
-  std::size_t n = 0;
-  for (std::string l; std::getline(in, l);) n += !l.empty();
-  return n;
-}
 
 void sleepS(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
 
@@ -332,4 +305,42 @@ TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
   EXPECT_NE(rc, 0);
   EXPECT_NE(readFile(dir + "/err2.txt").find("bad.pmd:3: unknown attribute 'hots'"), std::string::npos)
       << readFile(dir + "/err2.txt");
+}
+
+TEST(RunLocal, ReplayScriptOfLivoPmdRunsTheChainAndStopsIt) {
+  Netns ns;
+  if (!ns.ok) GTEST_SKIP() << ns.why;
+  if (!haveTool("python3") || !haveTool("lcm-logplayer")) GTEST_SKIP() << "python3 or lcm-logplayer missing";
+  const std::string dir = tempDir("runlocal_replay");
+  // The estimator and the map server are stand-ins that exit 0 on SIGINT; the others are the real ones.
+  fs::create_directories(dir + "/bin");
+  fs::create_symlink(kBin + "/livo-preprocess", dir + "/bin/livo-preprocess");
+  fs::create_symlink(kBin + "/livo-exporter", dir + "/bin/livo-exporter");
+  std::ofstream(dir + "/bin/stand-in") << "#!/bin/bash\ntrap 'echo stopped; exit 0' INT TERM\n"
+                                          "echo \"stand-in $(basename \"$0\") $*\"\nwhile true; do sleep 0.1; done\n";
+  fs::permissions(dir + "/bin/stand-in", fs::perms::owner_all);
+  fs::create_symlink("stand-in", dir + "/bin/livo-estimator");
+  fs::create_symlink("stand-in", dir + "/bin/livo-mapserver");
+  const test::SensorStream stream = test::makeSensorStream(2.0);
+  {
+    LogWriter w(dir + "/in.lcm");
+    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
+  }
+  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  Child rl(ns.exec({std::string(LIVO_SOURCE_DIR) + "/procman/run-local", "replay", "--var", "LOG=" + dir + "/in.lcm",
+                    "--var", "LIVO_BIN=" + dir + "/bin", "--var", "LIVO_CONFIG=" + dir + "/rig.yaml", "--var",
+                    "LIVO_OUT=" + dir + "/out", "--var", "LIVO_SPEED=2", "--var", "LIVO_LCM_URL=" + kUrl}),
+           dir + "/run-local.txt");
+  EXPECT_EQ(rl.wait(120), 0) << readFile(dir + "/run-local.txt");
+  const std::string log = readFile(dir + "/run-local.txt");
+  EXPECT_LT(log.find("started exporter"), log.find("started preprocess")) << log;  // sinks first
+  EXPECT_LT(log.find("started preprocess"), log.find("started logplayer")) << log;
+  EXPECT_NE(log.find("[preprocess] frames published 21 (20 with image"), std::string::npos) << log;
+  EXPECT_NE(log.find("[estimator] stand-in livo-estimator --config"), std::string::npos) << log;
+  EXPECT_NE(log.find("--memory-cap-mb 512 --map-file " + dir + "/out/map_server.map"), std::string::npos) << log;
+  EXPECT_NE(log.find("[exporter] outputs in " + dir + "/out"), std::string::npos) << log;
+  EXPECT_NE(log.find("nothing left running"), std::string::npos) << log;
+  EXPECT_EQ(log.find("done."), std::string::npos) << log;  // no OctoMap chatter
+  for (const char* f : {"trajectory.tum", "frames.csv", "stats.json", "map.pcd", "map.bt"})
+    EXPECT_TRUE(fs::exists(dir + "/out/" + f)) << f;
 }

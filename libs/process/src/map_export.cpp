@@ -10,9 +10,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
-#include <sstream>
 #include <stdexcept>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace livo {
 
@@ -239,15 +240,30 @@ const octomap::OcTree& OccupancyMap::tree() {
 void OccupancyMap::writeBt(const std::string& path) {
   waitIdle();
   const std::string tmp = path + ".tmp";
-  // OctoMap reports progress on std::cout; the processes keep stdout for their summary.
-  struct MuteCout {
-    std::ostringstream sink;
-    std::streambuf* saved = std::cout.rdbuf(sink.rdbuf());
-    ~MuteCout() { std::cout.rdbuf(saved); }
+  // Debian's OctoMap is built with debug output: it prints "Writing N nodes ... done." with fprintf on
+  // stderr. Keep that out of the processes' logs (nothing else prints here: the worker is idle).
+  struct SilenceStderr {
+    int saved = -1;
+    SilenceStderr() {
+      std::fflush(stderr);
+      saved = ::dup(STDERR_FILENO);
+      const int null_fd = ::open("/dev/null", O_WRONLY);
+      if (null_fd >= 0) {
+        ::dup2(null_fd, STDERR_FILENO);
+        ::close(null_fd);
+      }
+    }
+    ~SilenceStderr() {
+      std::fflush(stderr);
+      if (saved >= 0) {
+        ::dup2(saved, STDERR_FILENO);
+        ::close(saved);
+      }
+    }
   };
   bool ok = false;
   {
-    MuteCout mute;
+    SilenceStderr quiet;
     ok = tree_->writeBinary(tmp);
   }
   if (!ok) throw std::runtime_error(tmp + ": OctoMap could not write the tree");
