@@ -12,6 +12,8 @@
 #include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
+#include "livo/map/visual_point.hpp"
+#include "livo/process/map_export.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -84,12 +86,14 @@ int main(int argc, char** argv) {
   // 1. Configuration: every module reads its sections; unknown keys are errors.
   PipelineConfig pipe_cfg;
   ChannelConfig channels;
+  MapExportConfig export_cfg;
   MessageLimits limits;
   try {
     ConfigFile file = ConfigFile::load(args.config);
     const ConfigNode root = file.root();
     pipe_cfg.load(root);
     channels.load(root.section("channels"));
+    export_cfg.load(root.section("exporter"));
     file.checkAllKeysUsed();
     pipe_cfg.visual_mode = args.visual_mode;
     pipe_cfg.map_mode = args.map_mode;
@@ -111,8 +115,38 @@ int main(int argc, char** argv) {
     std::string log_error;
 
     bool stop = false;
+    // map.pcd (camera gray where an image saw the point) and map.bt (OctoMap from the scan rays).
+    MapCloud cloud(export_cfg);
+    OccupancyMap occupancy(export_cfg);
+    const auto addToMaps = [&](const Frame& frame, const FrameResult& r) {
+      const Pose T_world_imu = r.lio.state.pose();
+      std::vector<Eigen::Vector3f> pts;
+      std::vector<float> intensity;
+      std::vector<std::int32_t> rgb;
+      const CameraModel* cam = pipeline.camera();
+      const bool colour = cam && frame.has_image;
+      const Pose T_camera_world = (T_world_imu * pipe_cfg.camera.T_imu_camera).inverse();
+      const double scale = pipe_cfg.camera.scale;
+      for (const auto& bp : r.lio.points) {
+        const Vec3 p_w = T_world_imu * bp.p_imu;
+        pts.push_back(p_w.cast<float>());
+        intensity.push_back(1.f);
+        std::int32_t c = -1;
+        Vec2 px;
+        float g = 0.f;
+        if (colour && cam->project(T_camera_world * p_w, px) && cam->inImage(px, 1.0) &&
+            sampleBilinear(frame.image, (px.x() + 0.5) / scale - 0.5, (px.y() + 0.5) / scale - 0.5, g)) {
+          const auto v = static_cast<std::int32_t>(std::lround(g));
+          c = (v << 16) | (v << 8) | v;
+        }
+        rgb.push_back(c);
+      }
+      cloud.add(pts, intensity, rgb);
+      occupancy.insertScan(T_world_imu * pipe_cfg.lio.T_imu_lidar.translation(), pts);
+    };
     const auto onFrame = [&](const Frame& frame, const FrameResult& r) {
       if (stop) return;
+      if (r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
       FrameRecord rec;
       rec.utime = frame.utime;
       rec.has_pose = r.lio.initialized;
@@ -207,10 +241,16 @@ int main(int argc, char** argv) {
              {"points_nan", pst.points_nan}, {"points_emitted", pst.points_emitted},
              {"buffer_overflow_drops", pst.bufferOverflowDrops()}})
       counters["preprocess_" + k] = double(v);
+    const HybridMapStats hs = pipeline.mapStats();
     MapSummary ms;
-    ms.local_voxels = pipeline.odometry().map().numRootVoxels();
-    ms.visual_points_local = pipeline.visualMap().size();
-    ms.bytes = pipeline.odometry().map().bytes() + pipeline.visualMap().bytes();
+    ms.local_voxels = hs.local_voxels;
+    ms.visual_points_local = hs.visual_points_local;
+    ms.visual_points_longterm = hs.visual_points_longterm;
+    ms.bytes = hs.bytes;
+    cloud.writePcd(args.out + "/map.pcd");
+    if (export_cfg.octomap_enabled) occupancy.writeBt(args.out + "/map.bt");
+    counters["map_pcd_points"] = double(cloud.size());
+    counters["map_bt_scans_dropped"] = double(occupancy.scansDropped());
     counters["images_wrong_size"] = double(pipeline.imagesWrongSize());
     const double rss = bytesToMb(peakRssBytes());
     std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},

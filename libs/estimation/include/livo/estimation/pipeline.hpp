@@ -68,6 +68,8 @@ class Pipeline {
 
   const Recombiner& recombiner() const { return recombiner_; }
   const LioOdometry& odometry() const { return odometry_; }
+  /// The camera model at the processing scale (null without a camera).
+  const CameraModel* camera() const { return camera_.get(); }
   /// The local visual map (hybrid mode) or the only one (global mode).
   const VisualMap& visualMap() const { return map_->localVisual(); }
   /// The whole map: LiDAR map, local and long-term visual maps, counters.
