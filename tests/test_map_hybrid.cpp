@@ -340,6 +340,26 @@ TEST(HybridMap, MemoryCapEvictsFarthestLocalContentWhenLongtermIsGone) {
   }
 }
 
+TEST(HybridMap, EvictionIsSpreadOverUpdatesWithinTheBudget) {
+  HybridMapConfig cfg = smallConfig();
+  cfg.memory_cap_mb = 1.0;
+  cfg.max_removals_per_update = 200;
+  HybridMap map(cfg, voxels1m(), VisualMapConfig{});
+  fillScene(map, 9);
+  int updates = 0;
+  for (MapUpdateReport r = map.update(Vec3(2, 1, 0));; r = map.update(Vec3(2, 1, 0))) {
+    ++updates;
+    EXPECT_LE(r.removed_voxels + r.moved_to_longterm + r.moved_to_local + r.deleted_points + r.evicted_longterm_points +
+                  r.evicted_local_voxels + r.evicted_local_points,
+              200u);
+    if (r.pending == 0) break;
+    ASSERT_LT(updates, 1000);
+  }
+  EXPECT_GT(updates, 5);
+  EXPECT_GT(map.counters().evicted_local_voxels, 0u);
+  EXPECT_LE(map.stats().bytes, cfg.capBytes());
+}
+
 TEST(HybridMap, GlobalModeNeverSlidesNorEvicts) {
   HybridMapConfig cfg = smallConfig();
   cfg.mode = MapMode::Global;
@@ -448,7 +468,9 @@ TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
   cfg.recount_interval = 1;
   HybridMap map(cfg, voxels1m(), VisualMapConfig{});
   fillScene(map, 2);
-  const MapUpdateReport rep = map.update(Vec3(10, 0, 0));
+  map.update(Vec3(10, 0, 0));
+  const MapUpdateReport rep = map.update(Vec3(10, 0, 0));  // no work left: counts after nothing changed
+  ASSERT_TRUE(rep.recounted);
   const HybridMapStats s = map.stats();
   EXPECT_EQ(s.bytes_lidar, map.lidarMap().bytes());
   EXPECT_EQ(s.bytes_visual_local, map.localVisual().bytes() + map.localVisual().scratchBytes());

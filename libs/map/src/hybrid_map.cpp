@@ -140,6 +140,7 @@ HybridMapStats HybridMap::stats() const {
   s.bytes_index = tiles_.bytes() + pending_tiles_.capacity() * sizeof(VoxelKey) +
                   (pending_moves_.capacity() + pending_returns_.capacity() + pending_deletes_.capacity()) *
                       sizeof(std::int64_t) +
+                  pending_evictions_.capacity() * sizeof(Victim) +
                   occupied_.capacity() / 8;
   s.bytes = s.bytes_lidar + s.bytes_visual_local + s.bytes_visual_longterm + s.bytes_index;
   s.cap_bytes = cfg_.mode == MapMode::Hybrid ? cfg_.capBytes() : 0;
@@ -175,7 +176,8 @@ std::size_t HybridMap::recount() {
 
 std::size_t HybridMap::pendingWork() const {
   return (pending_tiles_.size() - tile_cursor_) + (pending_moves_.size() - move_cursor_) +
-         (pending_returns_.size() - return_cursor_) + (pending_deletes_.size() - delete_cursor_);
+         (pending_returns_.size() - return_cursor_) + (pending_deletes_.size() - delete_cursor_) +
+         (pending_evictions_.size() - evict_cursor_);
 }
 
 void HybridMap::clear() {
@@ -187,7 +189,8 @@ void HybridMap::clear() {
   pending_moves_.clear();
   pending_returns_.clear();
   pending_deletes_.clear();
-  tile_cursor_ = move_cursor_ = return_cursor_ = delete_cursor_ = 0;
+  pending_evictions_.clear();
+  tile_cursor_ = move_cursor_ = return_cursor_ = delete_cursor_ = evict_cursor_ = 0;
   started_ = false;
   occupied_.clear();
 }

@@ -43,15 +43,17 @@ MapUpdateReport HybridMap::update(const Vec3& robot) {
   if (!started_ || (robot - local_center_).norm() >= cfg_.slide_distance_m) startLocalSlide(robot, rep);
   started_ = true;
 
-  // 2. Pending slide work, bounded per update.
+  // 2. Pending work, bounded per update: evictions of an earlier cap event first (memory is the
+  // hard limit), then slide work.
   Budget budget{std::size_t(cfg_.max_removals_per_update), cfg_.max_removals_per_update == 0};
+  doEvictions(budget, rep);
   doPendingWork(budget, rep);
 
-  // 3. Memory cap.
-  enforceCap(robot, rep);
+  // 3. Memory cap: may plan evictions and start them with what is left of the budget.
+  enforceCap(robot, budget, rep);
 
   rep.pending = pendingWork();
-  if (!rep.recounted) rep.bytes = bytesEstimate();
+  rep.bytes = bytesEstimate();
   rep.ms = watch.elapsedMs();
   counters_.max_update_ms = std::max(counters_.max_update_ms, rep.ms);
   if (rep.slid) counters_.max_slide_ms = std::max(counters_.max_slide_ms, rep.ms);
@@ -63,13 +65,15 @@ void HybridMap::setMemoryCapMb(double mb) {
   c.memory_cap_mb = mb;
   c.validate();
   cfg_ = c;
-  updates_since_recount_ = cfg_.recount_interval;  // count exactly at the next update
+  calibrated_ = false;  // count exactly at the next update
+  if (cfg_.capBytes() == 0) std::vector<Victim>().swap(pending_evictions_), evict_cursor_ = 0;
 }
 
 void HybridMap::finishPendingWork() {
   if (cfg_.mode != MapMode::Hybrid) return;
   Budget budget{0, true};
   MapUpdateReport rep;
+  doEvictions(budget, rep);
   doPendingWork(budget, rep);
 }
 
@@ -186,24 +190,29 @@ void HybridMap::doPendingWork(Budget& budget, MapUpdateReport& rep) {
   if (tile_cursor_ == pending_tiles_.size()) std::vector<VoxelKey>().swap(pending_tiles_), tile_cursor_ = 0;
 }
 
-void HybridMap::enforceCap(const Vec3& robot, MapUpdateReport& rep) {
+void HybridMap::enforceCap(const Vec3& robot, Budget& budget, MapUpdateReport& rep) {
   const std::size_t cap = cfg_.capBytes();
   if (cap == 0) return;
-  const double high = cfg_.cap_high_water * double(cap);
-  const double low = cfg_.cap_low_water * double(cap);
-  ++updates_since_recount_;
-  std::size_t bytes = bytesEstimate();
-  if (double(bytes) > high || updates_since_recount_ >= cfg_.recount_interval) {
-    bytes = recount();
+  // Exact count at the first check and every recount_interval updates; the O(1) estimate between
+  // (the walk is the expensive part: ~4 ms per 30 MB of LiDAR map, more for deep octrees).
+  if (!calibrated_ || ++updates_since_recount_ >= cfg_.recount_interval) {
+    recount();
+    calibrated_ = true;
     rep.recounted = true;
-    rep.bytes = bytes;
   }
-  if (double(bytes) <= high) return;
+  if (evict_cursor_ < pending_evictions_.size()) return;  // an eviction is under way
+  const double bytes = double(bytesEstimate());
+  if (bytes <= cfg_.cap_high_water * double(cap)) return;
   ++counters_.eviction_events;
+  planEvictions(robot, bytes - cfg_.cap_low_water * double(cap));
+  doEvictions(budget, rep);
+}
 
-  // Evict down to the low-water mark. Sizes: exact per visual point, the bytes per root voxel of the
-  // exact count just made. Farthest first through a max-heap: O(n + k log n) for k evictions.
-  double need = double(bytes) - low;
+void HybridMap::planEvictions(const Vec3& robot, double need) {
+  // Victims farthest first until `need` bytes (exact per visual point, the calibrated bytes per root
+  // voxel), through max-heaps: O(n + k log n) for k victims.
+  pending_evictions_.clear();
+  evict_cursor_ = 0;
 
   // a) Long-term visual points, farthest first (ties: larger id first, deterministic).
   if (longterm_visual_.size() > 0) {
@@ -215,58 +224,71 @@ void HybridMap::enforceCap(const Vec3& robot, MapUpdateReport& rep) {
     std::make_heap(heap.begin(), heap.end());
     while (need > 0 && !heap.empty()) {
       std::pop_heap(heap.begin(), heap.end());
-      longterm_visual_.extract(std::get<1>(heap.back()));
+      pending_evictions_.push_back({Victim::LongtermPoint, VoxelKey{}, std::get<1>(heap.back())});
       need -= double(std::get<2>(heap.back()));
       heap.pop_back();
-      ++rep.evicted_longterm_points;
-      ++counters_.evicted_longterm_points;
     }
   }
+  if (need <= 0) return;
 
   // b) Local content, farthest first: root voxels (by centre) and local visual points (by position).
-  if (need > 0) {
-    struct Item {
-      double d2;
-      bool is_point;
-      VoxelKey key;
-      std::int64_t id;
-      double bytes;
-      bool operator<(const Item& o) const {  // heap order: farthest on top; ties points, then larger keys
-        if (d2 != o.d2) return d2 < o.d2;
-        if (is_point != o.is_point) return !is_point;
-        return is_point ? id < o.id : std::tie(key.x, key.y, key.z) < std::tie(o.key.x, o.key.y, o.key.z);
-      }
-    };
-    std::vector<Item> heap;
-    heap.reserve(tiles_.size() + local_visual_.size());
-    const double s = lidar_.config().voxel_size_m;
-    tiles_.forEachRoot([&](const VoxelKey& k) {
-      heap.push_back({(k.center(s) - robot).squaredNorm(), false, k, 0, bytes_per_root_});
-    });
-    local_visual_.forEach([&](const VisualPoint& p) {
-      heap.push_back({(p.p_world - robot).squaredNorm(), true, VoxelKey{}, p.id, double(p.bytes() + kPointOverhead)});
-    });
-    std::make_heap(heap.begin(), heap.end());
-    while (need > 0 && !heap.empty()) {
-      std::pop_heap(heap.begin(), heap.end());
-      const Item& it = heap.back();
-      if (it.is_point) {
-        local_visual_.extract(it.id);
-        ++rep.evicted_local_points;
-        ++counters_.evicted_local_points;
-      } else {
-        lidar_.removeVoxel(it.key);
-        tiles_.remove(it.key);
-        ++rep.evicted_local_voxels;
-        ++counters_.evicted_local_voxels;
-      }
-      need -= it.bytes;
-      heap.pop_back();
+  struct Item {
+    double d2;
+    bool is_point;
+    VoxelKey key;
+    std::int64_t id;
+    double bytes;
+    bool operator<(const Item& o) const {  // heap order: farthest on top; ties points, then larger keys
+      if (d2 != o.d2) return d2 < o.d2;
+      if (is_point != o.is_point) return !is_point;
+      return is_point ? id < o.id : std::tie(key.x, key.y, key.z) < std::tie(o.key.x, o.key.y, o.key.z);
+    }
+  };
+  std::vector<Item> heap;
+  heap.reserve(tiles_.size() + local_visual_.size());
+  const double s = lidar_.config().voxel_size_m;
+  tiles_.forEachRoot([&](const VoxelKey& k) {
+    heap.push_back({(k.center(s) - robot).squaredNorm(), false, k, 0, bytes_per_root_});
+  });
+  local_visual_.forEach([&](const VisualPoint& p) {
+    heap.push_back({(p.p_world - robot).squaredNorm(), true, VoxelKey{}, p.id, double(p.bytes() + kPointOverhead)});
+  });
+  std::make_heap(heap.begin(), heap.end());
+  while (need > 0 && !heap.empty()) {
+    std::pop_heap(heap.begin(), heap.end());
+    const Item& it = heap.back();
+    pending_evictions_.push_back({it.is_point ? Victim::LocalPoint : Victim::Root, it.key, it.id});
+    need -= it.bytes;
+    heap.pop_back();
+  }
+}
+
+void HybridMap::doEvictions(Budget& budget, MapUpdateReport& rep) {
+  while (evict_cursor_ < pending_evictions_.size() && budget.take()) {
+    const Victim& v = pending_evictions_[evict_cursor_++];
+    switch (v.kind) {
+      case Victim::LongtermPoint:
+        if (longterm_visual_.extract(v.id)) {
+          ++rep.evicted_longterm_points;
+          ++counters_.evicted_longterm_points;
+        }
+        break;
+      case Victim::LocalPoint:
+        if (local_visual_.extract(v.id)) {
+          ++rep.evicted_local_points;
+          ++counters_.evicted_local_points;
+        }
+        break;
+      case Victim::Root:
+        if (lidar_.removeVoxel(v.key) > 0) {
+          tiles_.remove(v.key);
+          ++rep.evicted_local_voxels;
+          ++counters_.evicted_local_voxels;
+        }
+        break;
     }
   }
-  // The per-item sizes were exact or freshly calibrated: the estimate stands for the bytes until the
-  // next exact count (no second walk).
-  rep.bytes = bytesEstimate();
+  if (evict_cursor_ == pending_evictions_.size()) std::vector<Victim>().swap(pending_evictions_), evict_cursor_ = 0;
 }
 
 }  // namespace livo

@@ -12,15 +12,16 @@
 //   - memory cap (memory_cap_mb > 0): when the accounted bytes exceed cap_high_water of the cap, the
 //     farthest long-term visual points (from the robot, Euclidean) are evicted first, then the
 //     farthest local content (LiDAR root voxels by centre and local visual points by position, in one
-//     order), until the bytes are below cap_low_water of the cap.
+//     order), content worth the bytes down to cap_low_water of the cap.
 //   Both visual maps are searched for the points in view (same scan-voxel retrieval in each; per grid
 //   cell the nearest of the two winners).
 // global mode (FAST-LIVO2 behaviour): one unbounded LiDAR map and one visual map; update() does nothing.
 //
 // Cost: a slide only visits the index tiles that reach out of the new cube (RootTileIndex) and the
-// visual voxels; the erasures and point moves are spread over updates, at most
-// max_removals_per_update per call. The cap check between exact byte counts is O(1) (counts times the
-// bytes per item of the last exact count); the exact count walks every structure (recount_interval).
+// visual points; the erasures, point moves and evictions are spread over updates, at most
+// max_removals_per_update per call (evictions first). The cap check between exact byte counts is
+// O(1) (counts times the bytes per item of the last exact count); the exact count walks every
+// structure (at the first check, then every recount_interval updates).
 //
 // Pointers: VisualPoint* from pointsInView / find and Plane* from lidarMap().findBestPlane stay valid
 // until the next update(), insertLidar() (planes only), removeBadPoints() (the removed points only) or
@@ -50,10 +51,10 @@ struct MapUpdateReport {
   std::size_t evicted_longterm_points = 0; ///< memory cap
   std::size_t evicted_local_voxels = 0;    ///< memory cap
   std::size_t evicted_local_points = 0;    ///< memory cap
-  std::size_t pending = 0;       ///< slide work left for the next updates (tiles + points)
-  bool recounted = false;        ///< an exact byte count was made (before any eviction)
-  /// Accounted bytes after the update: exact when recounted and nothing was evicted, else the O(1)
-  /// estimate (bytesEstimate(); after an eviction it is calibrated by the count just made).
+  std::size_t pending = 0;       ///< work left for the next updates (tiles, points, eviction victims)
+  bool recounted = false;        ///< an exact byte count was made (after the slide work)
+  /// Accounted bytes after the update: the O(1) estimate (bytesEstimate()), equal to the exact count
+  /// when one was made and nothing was evicted after it.
   std::size_t bytes = 0;
   double ms = 0.0;               ///< wall time of the update
 };
@@ -128,11 +129,12 @@ class HybridMap {
 
   // --- Maintenance --------------------------------------------------------------------------------
   /// Once per frame, after the map insertions: starts a slide when due (local, long-term), does up
-  /// to max_removals_per_update items of pending slide work, then enforces the memory cap
-  /// (immediately: after the call the bytes are below the cap whenever the cap can hold the
-  /// content). The first call centres both cubes (counted as a slide). Hybrid mode only; global
-  /// mode returns at once. Non-finite positions are ignored. Invalidates handed-out pointers (see
-  /// the file comment).
+  /// to max_removals_per_update items of pending work (evictions, then slide work), then checks the
+  /// memory cap and, over its high-water mark, plans an eviction and starts it with what is left of
+  /// the budget (with an unlimited budget the bytes are under the cap after the call whenever the
+  /// cap can hold anything). The first call centres both cubes (counted as a slide). Hybrid mode
+  /// only; global mode returns at once. Non-finite positions are ignored. Invalidates handed-out
+  /// pointers (see the file comment).
   MapUpdateReport update(const Vec3& robot_position);
   /// Finishes all pending slide work now (e.g. before an exact comparison in a test).
   void finishPendingWork();
@@ -173,7 +175,10 @@ class HybridMap {
   bool moveToLongterm(std::int64_t id, MapUpdateReport& rep);
   /// Exact recount; refreshes the bytes-per-item ratios.
   std::size_t recount();
-  void enforceCap(const Vec3& robot, MapUpdateReport& rep);
+  void enforceCap(const Vec3& robot, Budget& budget, MapUpdateReport& rep);
+  /// Lists the victims (farthest long-term points, then farthest local content) worth `need` bytes.
+  void planEvictions(const Vec3& robot, double need);
+  void doEvictions(Budget& budget, MapUpdateReport& rep);
   bool outsideLocal(const Vec3& c) const;
   bool outsideLongterm(const Vec3& c) const;
 
@@ -197,13 +202,21 @@ class HybridMap {
   std::size_t return_cursor_ = 0;
   std::vector<std::int64_t> pending_deletes_;  ///< long-term ids outside the long-term cube
   std::size_t delete_cursor_ = 0;
+  struct Victim {
+    enum Kind : std::uint8_t { LongtermPoint, LocalPoint, Root } kind;
+    VoxelKey key;     ///< Root
+    std::int64_t id;  ///< points
+  };
+  std::vector<Victim> pending_evictions_;  ///< memory cap, farthest first
+  std::size_t evict_cursor_ = 0;
 
   // Byte accounting between exact counts.
   double bytes_per_root_;
   double bytes_per_local_point_;
   double bytes_per_longterm_point_;
-  std::size_t fixed_bytes_ = 0;  ///< hash buckets, scratch, index: not proportional to the counts
+  std::size_t fixed_bytes_ = 0;  ///< scratch buffers and parts without items: not proportional to the counts
   int updates_since_recount_ = 0;
+  bool calibrated_ = false;      ///< an exact count was made since the cap was set
 
   // Merged retrieval state.
   std::vector<bool> occupied_;

@@ -35,16 +35,19 @@ struct HybridMapConfig {
 
   // Memory budget (hybrid mode only).
   double memory_cap_mb = 0.0;  ///< cap on the accounted bytes of all map structures, MiB; 0 = none
-  double cap_high_water = 0.95;  ///< evict when the bytes exceed this fraction of the cap ...
-  double cap_low_water = 0.85;   ///< ... down to this fraction (hysteresis: evictions stay rare)
-  /// With a cap, the exact byte count (a walk of every structure) is refreshed at least every this
-  /// many updates, and whenever the O(1) estimate between walks passes the high-water mark.
-  int recount_interval = 20;
+  /// Evictions start when the bytes exceed this fraction of the cap ... (the margin up to the cap
+  /// absorbs the growth while an eviction is spread over updates)
+  double cap_high_water = 0.95;
+  double cap_low_water = 0.85;  ///< ... and remove content worth the bytes down to this fraction
+  /// With a cap, the exact byte count (a walk of every structure: the slowest map step, ~4 ms per
+  /// 30 MB of LiDAR map) is made at the first update and then every this many updates; in between
+  /// the cap is checked on an O(1) estimate (counts times the bytes per item of the last count).
+  int recount_interval = 100;
 
   // Incremental sliding (a slide must not stall a frame).
   double tile_edge_m = 10.0;  ///< edge of the index tiles grouping LiDAR root voxels, m
-  /// Root voxels removed plus visual points moved or deleted per update(); the rest of a slide's work
-  /// carries over to the next updates. 0 = unlimited (the whole slide in one update).
+  /// Root voxels removed plus visual points moved, deleted or evicted per update(); the rest of a
+  /// slide's or an eviction's work carries over to the next updates. 0 = unlimited (all at once).
   int max_removals_per_update = 1000;
 
   /// Reads the keys above (same names) from `node` (the `map` section) and validates them; throws
