@@ -42,13 +42,14 @@ livo_install_packages() {
 # Configures (Release) and builds with $LIVO_JOBS jobs; ccache is picked up by CMake when installed.
 livo_build() {
   log "configuring $LIVO_BUILD"
-  cmake -S "$LIVO_ROOT" -B "$LIVO_BUILD" -DCMAKE_BUILD_TYPE=Release "$@" >"$LIVO_BUILD.configure.log" 2>&1 ||
-    { cat "$LIVO_BUILD.configure.log" >&2; log "cmake configure failed"; exit 1; }
-  log "building with -j$LIVO_JOBS (log: $LIVO_BUILD.build.log)"
+  mkdir -p "$LIVO_BUILD"
+  cmake -S "$LIVO_ROOT" -B "$LIVO_BUILD" -DCMAKE_BUILD_TYPE=Release "$@" >"$LIVO_BUILD/configure.log" 2>&1 ||
+    { cat "$LIVO_BUILD/configure.log" >&2; log "cmake configure failed"; exit 1; }
+  log "building with -j$LIVO_JOBS (log: $LIVO_BUILD/build.log)"
   local start=$SECONDS
-  if ! cmake --build "$LIVO_BUILD" -j"$LIVO_JOBS" >"$LIVO_BUILD.build.log" 2>&1; then
-    grep -E "error|Error" -A5 "$LIVO_BUILD.build.log" | head -60 >&2
-    log "build failed (full log: $LIVO_BUILD.build.log)"
+  if ! cmake --build "$LIVO_BUILD" -j"$LIVO_JOBS" >"$LIVO_BUILD/build.log" 2>&1; then
+    grep -E "error|Error" -A5 "$LIVO_BUILD/build.log" | head -60 >&2
+    log "build failed (full log: $LIVO_BUILD/build.log)"
     exit 1
   fi
   log "build done in $((SECONDS - start)) s"
