@@ -340,24 +340,38 @@ TEST(HybridMap, MemoryCapEvictsFarthestLocalContentWhenLongtermIsGone) {
   }
 }
 
-TEST(HybridMap, EvictionIsSpreadOverUpdatesWithinTheBudget) {
+TEST(HybridMap, EvictionIsSpreadOverUpdatesWithinTheBudgetBelowTheCap) {
   HybridMapConfig cfg = smallConfig();
-  cfg.memory_cap_mb = 1.0;
-  cfg.max_removals_per_update = 200;
+  cfg.max_removals_per_update = 50;
   HybridMap map(cfg, voxels1m(), VisualMapConfig{});
   fillScene(map, 9);
+  const Vec3 robot(2, 1, 0);
+  for (MapUpdateReport r = map.update(robot); r.pending > 0; r = map.update(robot)) {
+  }
+  const std::size_t b = map.stats().bytes;
+  const auto items = [](const MapUpdateReport& r) {
+    return r.removed_voxels + r.moved_to_longterm + r.moved_to_local + r.deleted_points + r.evicted_longterm_points +
+           r.evicted_local_voxels + r.evicted_local_points;
+  };
+  // Between the high-water mark and the cap: the eviction goes at the budget's pace.
+  map.setMemoryCapMb(double(b) / 0.97 / 1048576.0);
   int updates = 0;
-  for (MapUpdateReport r = map.update(Vec3(2, 1, 0));; r = map.update(Vec3(2, 1, 0))) {
+  for (MapUpdateReport r = map.update(robot);; r = map.update(robot)) {
     ++updates;
-    EXPECT_LE(r.removed_voxels + r.moved_to_longterm + r.moved_to_local + r.deleted_points + r.evicted_longterm_points +
-                  r.evicted_local_voxels + r.evicted_local_points,
-              200u);
+    EXPECT_LE(items(r), 50u);
+    EXPECT_LE(r.bytes, map.stats().cap_bytes);
     if (r.pending == 0) break;
     ASSERT_LT(updates, 1000);
   }
-  EXPECT_GT(updates, 5);
-  EXPECT_GT(map.counters().evicted_local_voxels, 0u);
-  EXPECT_LE(map.stats().bytes, cfg.capBytes());
+  EXPECT_GT(updates, 3);
+  EXPECT_EQ(map.counters().eviction_events, 1u);
+  EXPECT_LE(map.stats().bytes, map.stats().cap_bytes);
+  // Over the cap itself: evicted beyond the budget within one update.
+  map.setMemoryCapMb(double(b) / 2.0 / 1048576.0);
+  const MapUpdateReport r = map.update(robot);
+  EXPECT_GT(items(r), 50u);
+  EXPECT_LE(r.bytes, map.stats().cap_bytes);
+  EXPECT_LE(map.stats().bytes, map.stats().cap_bytes);
 }
 
 TEST(HybridMap, GlobalModeNeverSlidesNorEvicts) {

@@ -40,6 +40,7 @@ std::size_t HybridMap::insertLidar(const std::vector<PointWithCov>& points) {
     taken += lidar_.insert(index_scratch_);
     if (lidar_.numRootVoxels() != roots_before) tiles_.add(lidar_.keyOf(pw.p_world));
   }
+  points_since_recount_ += taken;
   return taken;
 }
 
@@ -111,7 +112,9 @@ int HybridMap::addPoints(const Image& gray, const CameraModel& cam, const Pose& 
 bool HybridMap::addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
                                float inv_exposure, Utime t) {
   VisualMap& owner = isLongterm(p) ? longterm_visual_ : local_visual_;
-  return owner.addObservation(p, gray, T_world_camera, px, inv_exposure, t);
+  const bool added = owner.addObservation(p, gray, T_world_camera, px, inv_exposure, t);
+  obs_since_recount_ += added;
+  return added;
 }
 
 void HybridMap::refine(VisualPoint& p) {
@@ -151,12 +154,23 @@ HybridMapStats HybridMap::stats() const {
 std::size_t HybridMap::bytesEstimate() const {
   const double b = bytes_per_root_ * double(lidar_.numRootVoxels()) +
                    bytes_per_local_point_ * double(local_visual_.size()) +
-                   bytes_per_longterm_point_ * double(longterm_visual_.size()) + double(fixed_bytes_);
+                   bytes_per_longterm_point_ * double(longterm_visual_.size()) + double(fixed_bytes_) +
+                   growth_per_point_ * double(points_since_recount_) +
+                   double(obs_since_recount_ * sizeof(VisualObservation));
   return static_cast<std::size_t>(b);
 }
 
 std::size_t HybridMap::recount() {
   const HybridMapStats s = stats();
+  // Growth inside existing root voxels (points collecting in leaves) is not in the per-root ratio:
+  // learn it per inserted LiDAR point from what the estimate missed (smoothed, never negative).
+  if (points_since_recount_ > 0) {
+    const double missed = double(s.bytes) - double(bytesEstimate());
+    const double rate = std::max(0.0, missed) / double(points_since_recount_);
+    growth_per_point_ = counters_.recounts > 0 ? 0.5 * (growth_per_point_ + rate) : rate;
+  }
+  points_since_recount_ = 0;
+  obs_since_recount_ = 0;
   // Bytes per item, without the scratch buffers (fixed); the index goes with the roots.
   const std::size_t scratch = local_visual_.scratchBytes() + longterm_visual_.scratchBytes();
   fixed_bytes_ = scratch;

@@ -46,7 +46,7 @@ MapUpdateReport HybridMap::update(const Vec3& robot) {
   // 2. Pending work, bounded per update: evictions of an earlier cap event first (memory is the
   // hard limit), then slide work.
   Budget budget{std::size_t(cfg_.max_removals_per_update), cfg_.max_removals_per_update == 0};
-  doEvictions(budget, rep);
+  doEvictions(budget, rep, 0.0);
   doPendingWork(budget, rep);
 
   // 3. Memory cap: may plan evictions and start them with what is left of the budget.
@@ -73,7 +73,7 @@ void HybridMap::finishPendingWork() {
   if (cfg_.mode != MapMode::Hybrid) return;
   Budget budget{0, true};
   MapUpdateReport rep;
-  doEvictions(budget, rep);
+  doEvictions(budget, rep, 0.0);
   doPendingWork(budget, rep);
 }
 
@@ -193,19 +193,32 @@ void HybridMap::doPendingWork(Budget& budget, MapUpdateReport& rep) {
 void HybridMap::enforceCap(const Vec3& robot, Budget& budget, MapUpdateReport& rep) {
   const std::size_t cap = cfg_.capBytes();
   if (cap == 0) return;
-  // Exact count at the first check and every recount_interval updates; the O(1) estimate between
-  // (the walk is the expensive part: ~4 ms per 30 MB of LiDAR map, more for deep octrees).
-  if (!calibrated_ || ++updates_since_recount_ >= cfg_.recount_interval) {
+  const double high = cfg_.cap_high_water * double(cap), low = cfg_.cap_low_water * double(cap);
+  // Exact count (a walk: the expensive part) at the first check, after each completed eviction (its
+  // per-root sizes are averages: far roots are lighter) and every recount_interval updates (roots
+  // grow as points arrive: the estimate falls behind); the O(1) estimate in between.
+  ++updates_since_recount_;
+  if (!calibrated_ || updates_since_recount_ >= cfg_.recount_interval) {
     recount();
     calibrated_ = true;
     rep.recounted = true;
   }
-  if (evict_cursor_ < pending_evictions_.size()) return;  // an eviction is under way
-  const double bytes = double(bytesEstimate());
-  if (bytes <= cfg_.cap_high_water * double(cap)) return;
-  ++counters_.eviction_events;
-  planEvictions(robot, bytes - cfg_.cap_low_water * double(cap));
-  doEvictions(budget, rep);
+  const bool evicting = evict_cursor_ < pending_evictions_.size();
+  if (!evicting && double(bytesEstimate()) > high) {
+    ++counters_.eviction_events;
+    planEvictions(robot, double(bytesEstimate()) - low);
+  }
+  doEvictions(budget, rep, 0.0);
+  // Hard limit: over the cap itself, evict beyond the budget down to the high-water mark (the margin
+  // covers the estimate's bias: far root voxels are lighter than the average used for them).
+  for (int round = 0; round < 2 && double(bytesEstimate()) > double(cap); ++round) {
+    if (evict_cursor_ >= pending_evictions_.size()) {
+      ++counters_.eviction_events;
+      planEvictions(robot, double(bytesEstimate()) - low);
+    }
+    Budget unlimited{0, true};
+    doEvictions(unlimited, rep, high);
+  }
 }
 
 void HybridMap::planEvictions(const Vec3& robot, double need) {
@@ -263,8 +276,9 @@ void HybridMap::planEvictions(const Vec3& robot, double need) {
   }
 }
 
-void HybridMap::doEvictions(Budget& budget, MapUpdateReport& rep) {
-  while (evict_cursor_ < pending_evictions_.size() && budget.take()) {
+void HybridMap::doEvictions(Budget& budget, MapUpdateReport& rep, double stop_below) {
+  while (evict_cursor_ < pending_evictions_.size() && !(stop_below > 0.0 && double(bytesEstimate()) <= stop_below) &&
+         budget.take()) {
     const Victim& v = pending_evictions_[evict_cursor_++];
     switch (v.kind) {
       case Victim::LongtermPoint:
@@ -288,7 +302,11 @@ void HybridMap::doEvictions(Budget& budget, MapUpdateReport& rep) {
         break;
     }
   }
-  if (evict_cursor_ == pending_evictions_.size()) std::vector<Victim>().swap(pending_evictions_), evict_cursor_ = 0;
+  if (evict_cursor_ == pending_evictions_.size() && !pending_evictions_.empty()) {
+    std::vector<Victim>().swap(pending_evictions_);
+    evict_cursor_ = 0;
+    calibrated_ = false;  // count exactly at the next check
+  }
 }
 
 }  // namespace livo

@@ -130,9 +130,9 @@ class HybridMap {
   // --- Maintenance --------------------------------------------------------------------------------
   /// Once per frame, after the map insertions: starts a slide when due (local, long-term), does up
   /// to max_removals_per_update items of pending work (evictions, then slide work), then checks the
-  /// memory cap and, over its high-water mark, plans an eviction and starts it with what is left of
-  /// the budget (with an unlimited budget the bytes are under the cap after the call whenever the
-  /// cap can hold anything). The first call centres both cubes (counted as a slide). Hybrid mode
+  /// memory cap: over its high-water mark it plans an eviction and starts it with what is left of
+  /// the budget; over the cap itself it evicts beyond the budget until under it, so that the
+  /// accounted bytes (estimate) are under the cap after every call whenever the cap can hold anything. The first call centres both cubes (counted as a slide). Hybrid mode
   /// only; global mode returns at once. Non-finite positions are ignored. Invalidates handed-out
   /// pointers (see the file comment).
   MapUpdateReport update(const Vec3& robot_position);
@@ -142,7 +142,8 @@ class HybridMap {
   /// Exact counts and bytes: walks every structure (stats rate, not per frame).
   HybridMapStats stats() const;
   std::size_t bytes() const { return stats().bytes; }
-  /// O(1) estimate: counts times the bytes per item of the last exact count (or defaults).
+  /// O(1) estimate: counts times the bytes per item of the last exact count (or defaults), plus the
+  /// growth since that count (inserted LiDAR points times a learnt rate, added observations).
   std::size_t bytesEstimate() const;
   const HybridMapCounters& counters() const { return counters_; }
   /// Changes the memory cap (MiB, 0 = none; e.g. a map server's --memory-cap-mb); applied by the next
@@ -178,7 +179,9 @@ class HybridMap {
   void enforceCap(const Vec3& robot, Budget& budget, MapUpdateReport& rep);
   /// Lists the victims (farthest long-term points, then farthest local content) worth `need` bytes.
   void planEvictions(const Vec3& robot, double need);
-  void doEvictions(Budget& budget, MapUpdateReport& rep);
+  /// Evicts planned victims within the budget; with stop_below > 0, stops once the estimate is at or
+  /// below it.
+  void doEvictions(Budget& budget, MapUpdateReport& rep, double stop_below);
   bool outsideLocal(const Vec3& c) const;
   bool outsideLongterm(const Vec3& c) const;
 
@@ -215,6 +218,9 @@ class HybridMap {
   double bytes_per_local_point_;
   double bytes_per_longterm_point_;
   std::size_t fixed_bytes_ = 0;  ///< scratch buffers and parts without items: not proportional to the counts
+  double growth_per_point_ = 0.0;        ///< bytes per inserted LiDAR point beyond new roots (learnt)
+  std::size_t points_since_recount_ = 0;  ///< LiDAR points inserted since the last exact count
+  std::size_t obs_since_recount_ = 0;     ///< visual observations added since the last exact count
   int updates_since_recount_ = 0;
   bool calibrated_ = false;      ///< an exact count was made since the cap was set
 
