@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
       rec.T_world_imu = r.lio.state.pose();
       rec.lio_ms = r.lio.lio_ms;
       rec.vio_ms = r.vio_ms;
-      rec.map_ms = r.lio.map_ms;
+      rec.map_ms = r.lio.map_ms + r.map.ms;  // insertion + slides / evictions
       rec.total_ms = r.total_ms;
       rec.sigma_min = r.lio.sigma_min;
       rec.degenerate = r.degenerate;
@@ -250,6 +250,15 @@ int main(int argc, char** argv) {
     cloud.writePcd(args.out + "/map.pcd");
     if (export_cfg.octomap_enabled) occupancy.writeBt(args.out + "/map.bt");
     counters["map_pcd_points"] = double(cloud.size());
+    const HybridMapCounters& mc = hs.counters;
+    for (const auto& [k, v] : std::map<std::string, double>{
+             {"slides", double(mc.slides)}, {"longterm_slides", double(mc.longterm_slides)},
+             {"removed_voxels", double(mc.removed_voxels)}, {"moved_to_longterm", double(mc.moved_to_longterm)},
+             {"moved_to_local", double(mc.moved_to_local)}, {"deleted_points", double(mc.deleted_points)},
+             {"eviction_events", double(mc.eviction_events)}, {"evicted_longterm_points", double(mc.evicted_longterm_points)},
+             {"evicted_local_voxels", double(mc.evicted_local_voxels)}, {"evicted_local_points", double(mc.evicted_local_points)},
+             {"max_update_ms", mc.max_update_ms}, {"max_slide_ms", mc.max_slide_ms}})
+      counters["map_" + k] = v;
     counters["map_bt_scans_dropped"] = double(occupancy.scansDropped());
     counters["images_wrong_size"] = double(pipeline.imagesWrongSize());
     const double rss = bytesToMb(peakRssBytes());
