@@ -1,0 +1,112 @@
+// libs/sim: the shipped scenarios run and match their rig configs; unknown keys and bad values name the
+// key; the rig config has exactly the keys of the README.
+#include "sim_test_util.hpp"
+
+#include "livo/common/config.hpp"
+#include "livo/sim/simulator.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+using namespace livo;
+using namespace livo::sim;
+using namespace livo::sim::test;
+
+namespace {
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- scenarios and rig configs
+
+TEST(SimScenario, ShippedScenariosRunAndMatchTheirRigConfigs) {
+  for (const std::string name : {"room", "corridor", "street", "wall", "demo"}) {
+    SCOPED_TRACE(name);
+    SimScenario sc = loadScenarioFile(std::string(LIVO_SOURCE_DIR) + "/config/sim/" + name + ".yaml");
+    sc.duration_s = 0.15;  // a little of every sensor
+    Simulator sim(sc);
+    int imu = 0, scans = 0, images = 0;
+    SimEvent ev;
+    while (sim.next(ev)) {
+      imu += ev.kind == SimEvent::Kind::Imu;
+      scans += ev.kind == SimEvent::Kind::Lidar && ev.scan.points.size() > 1000;
+      images += ev.kind == SimEvent::Kind::Image && !ev.image.empty();
+    }
+    EXPECT_EQ(imu, 30);
+    EXPECT_EQ(scans, 2);
+    EXPECT_EQ(images, 2);
+    std::ostringstream rig;
+    sim.writeRigConfig(rig);
+    EXPECT_EQ(rig.str(), readFile(std::string(LIVO_SOURCE_DIR) + "/config/sim_" + name + ".yaml"))
+        << "regenerate with: livo-sim --scenario config/sim/" << name << ".yaml ... --rig config/sim_" << name << ".yaml";
+  }
+}
+
+TEST(SimScenario, UnknownKeysAndBadValuesNameTheKey) {
+  auto message = [](const std::string& yaml) {
+    try {
+      parseScenario(yaml);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("world:\n  kind: room\n  sise_m: [1, 2, 3]\n").find("world.sise_m"), std::string::npos);
+  EXPECT_NE(message("lidar:\n  model: velodyne\n").find("lidar.model"), std::string::npos);
+  EXPECT_NE(message("trajectory:\n  kind: waypoints\n").find("trajectory.waypoints"), std::string::npos);
+  EXPECT_NE(message("camera:\n  distortion: [0, 0]\n").find("camera.distortion"), std::string::npos);
+  EXPECT_NE(message("imu:\n  rate_hz: abc\n").find("imu.rate_hz"), std::string::npos);
+  EXPECT_EQ(message("seed: 3\nworld:\n  kind: wall\n"), "no error");
+}
+
+TEST(SimRig, RigConfigHasExactlyTheReadmeKeys) {
+  SimScenario sc = makeScenario("street", "spinning32");
+  Simulator sim(sc);
+  std::ostringstream out;
+  sim.writeRigConfig(out);
+  const ConfigFile f = ConfigFile::parse(out.str(), "rig");
+  const ConfigNode root = f.root();
+  std::string env, model, cam_model;
+  root.get("environment", env);
+  EXPECT_EQ(env, "outdoor");
+  const ConfigNode imu = root.section("imu");
+  double d;
+  int i;
+  for (const char* k : {"rate_hz", "gyro_noise", "accel_noise", "gyro_bias_walk", "accel_bias_walk", "time_offset_s"})
+    imu.require(k, d);
+  imu.require("init_samples", i);
+  const ConfigNode lidar = root.section("lidar");
+  lidar.require("model", model);
+  EXPECT_EQ(model, "spinning32");
+  Eigen::Isometry3d T;
+  lidar.require("T_imu_lidar", T);
+  EXPECT_TRUE(T.isApprox(sc.extrinsics.T_imu_lidar, 1e-9));
+  for (const char* k : {"time_offset_s", "blind_m", "max_range_m", "range_noise_m", "beam_noise_deg"}) lidar.require(k, d);
+  lidar.require("point_filter_num", i);
+  const ConfigNode cam = root.section("camera");
+  bool enabled = false;
+  cam.require("enabled", enabled);
+  EXPECT_TRUE(enabled);
+  cam.require("model", cam_model);
+  cam.require("width", i);
+  EXPECT_EQ(i, sc.camera.width);
+  cam.require("height", i);
+  for (const char* k : {"fx", "fy", "cx", "cy", "scale", "time_offset_s", "pixel_noise"}) cam.require(k, d);
+  std::vector<double> dist;
+  cam.require("distortion", dist);
+  cam.require("T_imu_camera", T);
+  EXPECT_TRUE(T.isApprox(sc.extrinsics.T_imu_camera, 1e-9));
+  const ConfigNode sel = root.section("selector");
+  for (const char* k : {"degeneracy_threshold", "tau_translation_m", "tau_rotation_deg"}) sel.require(k, d);
+  sel.require("degenerate_frames", i);
+  EXPECT_NO_THROW(f.checkAllKeysUsed());
+}

@@ -1,0 +1,66 @@
+// libs/sim: BVH raycasts vs brute-force raycasts (room and street worlds), and the corridor's degeneracy (no
+// along its axis within LiDAR range).
+#include "sim_test_util.hpp"
+
+#include "livo/sim/random.hpp"
+#include "livo/sim/simulator.hpp"
+#include "livo/sim/world_gen.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace livo;
+using namespace livo::sim;
+using namespace livo::sim::test;
+
+namespace {
+
+Utime t0Utime(const Simulator& sim, double t) { return sim.startUtime() + fromSeconds(t); }
+
+}  // namespace
+
+TEST(SimWorld, BvhRaycastMatchesBruteForce) {
+  for (const std::string kind : {"room", "street"}) {
+    SCOPED_TRACE(kind);
+    const SimScenario sc = makeScenario(kind, kind == "street" ? "spinning32" : "avia");
+    Simulator sim(sc);
+    SplitMix rng(11);
+    int hits = 0;
+    for (int k = 0; k < 3000; ++k) {
+      const auto& path = sim.trajectory().path();
+      const Vec3 o = path[static_cast<std::size_t>(rng.next() % path.size())] + Vec3(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), 0.0);
+      const Vec3 d = Vec3(rng.gaussian(), rng.gaussian(), rng.gaussian()).normalized();
+      const Hit a = sim.world().raycast(o, d, 150.0), b = sim.world().raycastBruteForce(o, d, 150.0);
+      ASSERT_EQ(a.valid, b.valid);
+      if (!a.valid) continue;
+      ++hits;
+      ASSERT_EQ(a.surface, b.surface);
+      ASSERT_EQ(a.distance, b.distance);
+      ASSERT_EQ(a.albedo, b.albedo);
+    }
+    EXPECT_GT(hits, 1000);
+  }
+}
+
+TEST(SimWorld, CorridorHasNoSurfaceAlongItsAxisWithinLidarRange) {
+  const SimScenario sc = loadScenarioFile(std::string(LIVO_SOURCE_DIR) + "/config/sim/corridor.yaml");
+  Simulator sim(sc);
+  double x_min = 1e9, x_max = -1e9;
+  std::size_t hits = 0;
+  for (double t = 0.0; t <= sc.duration_s; t += 1.0) {
+    const Pose T = sim.T_world_lidar(t0Utime(sim, t));
+    x_min = std::min(x_min, T.translation().x());
+    x_max = std::max(x_max, T.translation().x());
+    const int n = 1500;  // Fibonacci sphere of directions
+    for (int k = 0; k < n; ++k) {
+      const double z = 1.0 - 2.0 * (k + 0.5) / n, r = std::sqrt(1.0 - z * z), phi = k * 2.399963229728653;
+      const Hit h = sim.world().raycast(T.translation(), Vec3(r * std::cos(phi), r * std::sin(phi), z), sc.lidar.max_range_m);
+      if (!h.valid) continue;
+      ++hits;
+      ASSERT_EQ(h.normal.x(), 0.0) << "surface " << h.surface << " at " << h.point.transpose();
+    }
+  }
+  EXPECT_GT(hits, 50000u);
+  EXPECT_GE(x_max - x_min, 60.0);  // the walk covers >= 60 m of corridor
+}
