@@ -1,5 +1,5 @@
-// libs/sim: BVH raycasts vs brute-force raycasts (room and street worlds), and the corridor's degeneracy (no
-// along its axis within LiDAR range).
+// libs/sim: BVH raycasts vs brute-force raycasts (room and street worlds), and the corridor's degeneracy
+// (no surface along its axis within LiDAR range).
 #include "sim_test_util.hpp"
 
 #include "livo/sim/random.hpp"
