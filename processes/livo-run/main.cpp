@@ -14,6 +14,7 @@
 #include "livo/io/run_outputs.hpp"
 #include "livo/map/visual_point.hpp"
 #include "livo/process/map_export.hpp"
+#include "livo/process/scan_colour.hpp"
 
 #include <cstdio>
 #include <cstring>
@@ -101,8 +102,6 @@ int main(int argc, char** argv) {
     std::cerr << "livo-run: " << e.what() << "\n";
     return 2;
   }
-  if (args.visual_mode != "off" && !args.quiet)
-    std::cerr << "livo-run: note: the visual update is not part of this build yet; running LiDAR-inertial only\n";
 
   try {
     LogReader reader(args.log);
@@ -120,28 +119,11 @@ int main(int argc, char** argv) {
     OccupancyMap occupancy(export_cfg);
     const auto addToMaps = [&](const Frame& frame, const FrameResult& r) {
       const Pose T_world_imu = r.lio.state.pose();
-      std::vector<Eigen::Vector3f> pts;
-      std::vector<float> intensity;
-      std::vector<std::int32_t> rgb;
-      const CameraModel* cam = pipeline.camera();
-      const bool colour = cam && frame.has_image;
-      const Pose T_camera_world = (T_world_imu * pipe_cfg.camera.T_imu_camera).inverse();
-      const double scale = pipe_cfg.camera.scale;
-      for (const auto& bp : r.lio.points) {
-        const Vec3 p_w = T_world_imu * bp.p_imu;
-        pts.push_back(p_w.cast<float>());
-        intensity.push_back(1.f);
-        std::int32_t c = -1;
-        Vec2 px;
-        float g = 0.f;
-        if (colour && cam->project(T_camera_world * p_w, px) && cam->inImage(px, 1.0) &&
-            sampleBilinear(frame.image, (px.x() + 0.5) / scale - 0.5, (px.y() + 0.5) / scale - 0.5, g)) {
-          const auto v = static_cast<std::int32_t>(std::lround(g));
-          c = (v << 16) | (v << 8) | v;
-        }
-        rgb.push_back(c);
-      }
-      cloud.add(pts, intensity, rgb);
+      const RegisteredScan scan = colourScan(frame.utime, T_world_imu, r.lio.points, pipeline.camera(),
+                                             frame.has_image ? &frame.image : nullptr, pipe_cfg.camera.T_imu_camera,
+                                             pipe_cfg.camera.scale);
+      const std::vector<Eigen::Vector3f>& pts = scan.points;
+      cloud.add(scan.points, scan.intensity, scan.rgb);
       occupancy.insertScan(T_world_imu * pipe_cfg.lio.T_imu_lidar.translation(), pts);
     };
     const auto onFrame = [&](const Frame& frame, const FrameResult& r) {

@@ -5,6 +5,8 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/sensors/downsample.hpp"
 
+#include <stdexcept>
+
 namespace livo {
 
 void LioOdometryConfig::load(const ConfigNode& root) {
@@ -35,6 +37,8 @@ LioOdometry::LioOdometry(LioOdometryConfig cfg)
 
 LioOdometry::LioOdometry(LioOdometryConfig cfg, HybridMap& map) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(&map) {}
 
+LioOdometry::LioOdometry(LioOdometryConfig cfg, RemoteMapTag) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(nullptr) {}
+
 std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
                                                   const std::vector<ImuTracePoint>& trace) const {
   // Undistort every point to the frame time, then downsample in the IMU frame (FAST-LIVO2 order).
@@ -60,7 +64,7 @@ std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
   return pts;
 }
 
-void LioOdometry::insertIntoMap(const std::vector<BodyPoint>& pts) {
+std::vector<PointWithCov> LioOdometry::worldPoints(const std::vector<BodyPoint>& pts) const {
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   for (const auto& bp : pts) {
@@ -69,14 +73,14 @@ void LioOdometry::insertIntoMap(const std::vector<BodyPoint>& pts) {
     pw.cov_world = worldPointCovariance(x_, P_, bp);
     world.push_back(pw);
   }
-  map_->insertLidar(world);
+  return world;
 }
 
-LioFrameResult LioOdometry::process(const Frame& frame) {
-  LioFrameResult r;
+bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
+  r = LioFrameResult{};
   r.utime = frame.utime;
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
-  Stopwatch watch;
+  watch_.restart();
 
   // 1. Static initialisation from the first IMU samples (gravity, gyro bias, g units).
   if (!init_.done()) {
@@ -85,7 +89,7 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
       last_imu_fed_ = s.utime;
       if (init_.add(s)) break;
     }
-    if (!init_.done()) return r;
+    if (!init_.done()) return false;
     x_ = init_.initialState();
     P_ = initialCovariance();
     propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
@@ -95,7 +99,7 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
   if (frame.utime <= x_.utime) {  // a frame inside the initialisation window: nothing to estimate yet
     r.state = x_;
     r.P = P_;
-    return r;
+    return false;
   }
 
   // 2. Forward propagation to the frame time, keeping the per-sample trace.
@@ -105,12 +109,17 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
   // 3. Undistort + downsample the sweep, with per-point covariances.
   r.points = preparePoints(frame.sweep, trace);
   r.n_points = static_cast<int>(r.points.size());
+  r.state = x_;  // the prediction until update()
+  r.P = P_;
+  return true;
+}
 
+void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes) {
   // 4. Iterated point-to-plane update against the map (skipped until the map has content).
   if (map_started_ && !r.points.empty()) {
     NavState x = x_;
     StateCov P = P_;
-    const LioUpdateResult u = lidarUpdate(x, P, r.points, map_->lidarMap(), cfg_.lio);
+    const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio);
     r.n_matched = u.matched;
     r.iterations = u.iterations;
     r.rms_residual_m = u.rms_residual_m;
@@ -123,19 +132,30 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
       r.lio_ok = true;
     }
   }
-  r.lio_ms = watch.elapsedMs();
-
-  // 5. Map insertion with the posterior pose.
-  Stopwatch map_watch;
-  // As in the reference, the map grows every frame (a failed update keeps the IMU prediction).
-  if (!r.points.empty()) {
-    insertIntoMap(r.points);
-    r.map_started = !map_started_;
-    map_started_ = true;
-  }
-  r.map_ms = map_watch.elapsedMs();
+  r.lio_ms = watch_.elapsedMs();
   r.state = x_;
   r.P = P_;
+}
+
+void LioOdometry::markInserted(LioFrameResult& r) {
+  if (r.points.empty()) return;
+  r.map_started = !map_started_;
+  map_started_ = true;
+}
+
+LioFrameResult LioOdometry::process(const Frame& frame) {
+  LioFrameResult r;
+  if (!predict(frame, r)) return r;
+  if (map_ == nullptr) throw std::logic_error("LioOdometry::process: no map (remote mode: use predict/update)");
+  update(r, map_->lidarMap());
+  // 5. Map insertion with the posterior pose. As in the reference, the map grows every frame (a failed
+  // update keeps the IMU prediction).
+  Stopwatch map_watch;
+  if (!r.points.empty()) {
+    map_->insertLidar(worldPoints(r.points));
+    markInserted(r);
+  }
+  r.map_ms = map_watch.elapsedMs();
   return r;
 }
 

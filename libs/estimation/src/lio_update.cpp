@@ -38,7 +38,7 @@ Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint&
          P.block<3, 3>(sidx::kPos, sidx::kPos);
 }
 
-LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const VoxelMap& map,
+LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
                             const LioConfig& cfg) {
   using Mat66 = Eigen::Matrix<double, 6, 6>;
   using Vec66 = Eigen::Matrix<double, 6, 1>;

@@ -66,6 +66,7 @@ Validation checkVisualPoint(const livo::visual_point_t& m, const MessageLimits& 
   LIVO_MSG_CHECK(covarianceUpper3(m.position_cov, "position_cov"));
   LIVO_MSG_CHECK(count(m.num_patches, lim.max_patches_per_point, "num_patches", "max_patches_per_point"));
   LIVO_MSG_CHECK(size(m.patches, m.num_patches, "patches", "num_patches"));
+  if (m.bad_updates < 0) return Validation::fail("bad_updates: expected >= 0, got " + std::to_string(m.bad_updates));
   if (m.reference < -1 || m.reference >= m.num_patches)
     return Validation::fail("reference: index " + std::to_string(m.reference) + " outside -1.." +
                             std::to_string(m.num_patches - 1) + " (num_patches " + std::to_string(m.num_patches) + ")");
@@ -109,6 +110,10 @@ Validation checkQuery(const livo::map_query_t& m, const MessageLimits& lim) {
   LIVO_MSG_CHECK(size(m.key_x, m.num_keys, "key_x", "num_keys"));
   LIVO_MSG_CHECK(size(m.key_y, m.num_keys, "key_y", "num_keys"));
   LIVO_MSG_CHECK(size(m.key_z, m.num_keys, "key_z", "num_keys"));
+  LIVO_MSG_CHECK(count(m.num_visual_keys, lim.max_points, "num_visual_keys", "max_points"));
+  LIVO_MSG_CHECK(size(m.visual_key_x, m.num_visual_keys, "visual_key_x", "num_visual_keys"));
+  LIVO_MSG_CHECK(size(m.visual_key_y, m.num_visual_keys, "visual_key_y", "num_visual_keys"));
+  LIVO_MSG_CHECK(size(m.visual_key_z, m.num_visual_keys, "visual_key_z", "num_visual_keys"));
   LIVO_MSG_CHECK(pose7(m.T_world_camera, "T_world_camera"));
   return nonNegative(m.max_visual_depth_m, "max_visual_depth_m");
 }
@@ -121,6 +126,8 @@ Validation checkSubmap(const livo::submap_t& m, const MessageLimits& lim) {
   LIVO_MSG_CHECK(size(m.planes, m.num_planes, "planes", "num_planes"));
   LIVO_MSG_CHECK(count(m.num_visual_points, lim.max_visual_points, "num_visual_points", "max_visual_points"));
   LIVO_MSG_CHECK(size(m.visual_points, m.num_visual_points, "visual_points", "num_visual_points"));
+  if (m.next_visual_point_id < 1)
+    return Validation::fail("next_visual_point_id: expected >= 1, got " + std::to_string(m.next_visual_point_id));
   for (std::int32_t i = 0; i < m.num_planes; ++i)
     LIVO_MSG_CHECK(nest(checkPlane(m.planes[std::size_t(i)]), "planes[" + std::to_string(i) + "]"));
   return checkVisualPoints(m.visual_points, m.num_visual_points, "visual_points", lim);
@@ -197,6 +204,7 @@ void convert(const livo::visual_point_t& m, VisualPoint& p) {
   p.normal = Vec3(m.normal[0], m.normal[1], m.normal[2]);
   p.cov = mat3FromUpper(m.position_cov);
   p.converged = m.converged != 0;
+  p.bad_updates = m.bad_updates;
   p.reference = m.reference;
   p.obs.resize(m.patches.size());
   for (std::size_t i = 0; i < m.patches.size(); ++i) convert(m.patches[i], p.obs[i]);
@@ -256,6 +264,7 @@ livo::visual_point_t toMsg(const VisualPoint& p) {
   }
   upperFromMat3(p.cov, m.position_cov);
   m.converged = p.converged;
+  m.bad_updates = p.bad_updates;
   m.reference = p.reference;
   m.num_patches = static_cast<std::int32_t>(p.obs.size());
   m.patches.reserve(p.obs.size());
@@ -326,6 +335,17 @@ livo::map_query_t toMsg(const MapQuery& q) {
     m.key_y[i] = static_cast<std::int32_t>(k.y);
     m.key_z[i] = static_cast<std::int32_t>(k.z);
   }
+  const std::size_t nv = q.visual_keys.size();
+  m.num_visual_keys = static_cast<std::int32_t>(nv);
+  m.visual_key_x.resize(nv); m.visual_key_y.resize(nv); m.visual_key_z.resize(nv);
+  for (std::size_t i = 0; i < nv; ++i) {
+    const VoxelKey& k = q.visual_keys[i];
+    if (!fitsInt32(k.x) || !fitsInt32(k.y) || !fitsInt32(k.z))
+      checkKeyRange(k, "map_query_t.visual_keys[" + std::to_string(i) + "]");  // throws
+    m.visual_key_x[i] = static_cast<std::int32_t>(k.x);
+    m.visual_key_y[i] = static_cast<std::int32_t>(k.y);
+    m.visual_key_z[i] = static_cast<std::int32_t>(k.z);
+  }
   m.want_visual = q.want_visual;
   const auto C = poseToArray(q.T_world_camera);
   std::copy(C.begin(), C.end(), m.T_world_camera);
@@ -345,6 +365,9 @@ Validation fromMsg(const livo::map_query_t& m, MapQuery& out, const MessageLimit
   out.radius_m = m.radius_m;
   out.keys.resize(std::size_t(m.num_keys));
   for (std::size_t i = 0; i < out.keys.size(); ++i) out.keys[i] = VoxelKey{m.key_x[i], m.key_y[i], m.key_z[i]};
+  out.visual_keys.resize(std::size_t(m.num_visual_keys));
+  for (std::size_t i = 0; i < out.visual_keys.size(); ++i)
+    out.visual_keys[i] = VoxelKey{m.visual_key_x[i], m.visual_key_y[i], m.visual_key_z[i]};
   out.want_visual = m.want_visual != 0;
   out.T_world_camera = poseFromArray(m.T_world_camera);
   out.max_visual_depth_m = m.max_visual_depth_m;
@@ -366,6 +389,7 @@ livo::submap_t toMsg(const Submap& s) {
       throw std::out_of_range("submap_t.planes[" + std::to_string(i) + "]: " + e.what());
     }
   }
+  m.next_visual_point_id = s.next_visual_point_id;
   m.num_visual_points = static_cast<std::int32_t>(s.visual_points.size());
   m.visual_points.reserve(s.visual_points.size());
   for (const auto& p : s.visual_points) m.visual_points.push_back(toMsg(p));
@@ -382,6 +406,7 @@ Validation fromMsg(const livo::submap_t& m, Submap& out, const MessageLimits& li
   out.planes.resize(m.planes.size());
   for (std::size_t i = 0; i < m.planes.size(); ++i) convert(m.planes[i], out.planes[i]);
   convertVisualPoints(m.visual_points, out.visual_points);
+  out.next_visual_point_id = m.next_visual_point_id;
   return Validation::ok();
 }
 

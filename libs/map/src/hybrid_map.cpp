@@ -131,6 +131,52 @@ std::size_t HybridMap::removeBadPoints() {
   return local_visual_.removeBadPoints() + longterm_visual_.removeBadPoints();
 }
 
+std::size_t HybridMap::copyVisualPointsIn(const std::vector<VoxelKey>& visual_keys,
+                                          std::vector<VisualPoint>& out) const {
+  std::vector<VoxelKey> keys = visual_keys;
+  std::sort(keys.begin(), keys.end(), [](const VoxelKey& a, const VoxelKey& b) {
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+  });
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  const std::size_t before = out.size();
+  const auto copy = [&out](const VisualPoint& p) { out.push_back(p); };
+  for (const VoxelKey& k : keys) {
+    local_visual_.forEachInVoxel(k, copy);
+    longterm_visual_.forEachInVoxel(k, copy);
+  }
+  return out.size() - before;
+}
+
+bool HybridMap::upsertVisualPoint(VisualPoint p) {
+  VisualMap* owner = &local_visual_;
+  std::size_t old_obs = 0;
+  if (auto old = local_visual_.extract(p.id)) {
+    old_obs = old->obs.size();
+  } else if (auto old_lt = longterm_visual_.extract(p.id)) {
+    owner = &longterm_visual_;
+    old_obs = old_lt->obs.size();
+  }
+  if (p.obs.empty()) return true;  // a removal
+  if (!p.p_world.allFinite() || p.reference < -1 || p.reference >= int(p.obs.size())) return false;
+  if (p.obs.size() > old_obs) obs_since_recount_ += p.obs.size() - old_obs;
+  return owner->insert(std::make_unique<VisualPoint>(std::move(p)));
+}
+
+bool HybridMap::appendObservation(std::int64_t id, const VisualObservation& obs) {
+  VisualMap* owner = &local_visual_;
+  VisualPoint* p = local_visual_.find(id);
+  if (p == nullptr) {
+    owner = &longterm_visual_;
+    p = longterm_visual_.find(id);
+  }
+  if (p == nullptr || p->converged) return false;
+  p->obs.push_back(obs);
+  p->last_seen = std::max(p->last_seen, obs.utime);
+  ++obs_since_recount_;
+  owner->refine(*p, &lidar_);
+  return true;
+}
+
 HybridMapStats HybridMap::stats() const {
   HybridMapStats s;
   s.mode = cfg_.mode;

@@ -16,6 +16,8 @@
 #include "livo/map/voxel_map_config.hpp"
 
 #include <array>
+#include <istream>
+#include <ostream>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -41,6 +43,32 @@ class OctreeNode {
         if (c) c->forEachPlane(f);
     }
   }
+
+  /// Calls f(const Plane&, const std::array<std::int8_t, 3>& octants) for every plane leaf below this
+  /// node, with the child path from the root (octant per layer below the root, -1 beyond the leaf;
+  /// paths deeper than 3 layers keep only the first 3).
+  template <class F>
+  void forEachPlaneWithPath(F&& f, std::array<std::int8_t, 3> path = {{-1, -1, -1}}, int depth = 0) const {
+    if (plane_) {
+      f(static_cast<const Plane&>(*plane_), path);
+    } else if (children_) {
+      for (std::size_t i = 0; i < children_->size(); ++i) {
+        if (!(*children_)[i]) continue;
+        std::array<std::int8_t, 3> child = path;
+        if (depth < 3) child[std::size_t(depth)] = static_cast<std::int8_t>(i);
+        (*children_)[i]->forEachPlaneWithPath(f, child, depth + 1);
+      }
+    }
+  }
+
+  /// Binary form of this subtree (map_file.cpp); load() checks every count against `limits` and throws
+  /// std::runtime_error on malformed input.
+  void save(std::ostream& os) const;
+  struct LoadLimits {
+    int max_layer = 6;
+    std::size_t max_points = 100000;  ///< per node
+  };
+  static std::unique_ptr<OctreeNode> load(std::istream& is, const LoadLimits& limits, int layer);
 
   /// Adds this subtree's counts and byte estimate (see VoxelMap::bytes()).
   void accumulate(VoxelMapStats& s) const;

@@ -302,6 +302,12 @@ bool VisualMap::insert(std::unique_ptr<VisualPoint> point) {
   return true;
 }
 
+void VisualMap::forEachInVoxel(const VoxelKey& key, const std::function<void(const VisualPoint&)>& f) const {
+  const auto it = voxels_.find(key);
+  if (it == voxels_.end()) return;
+  for (const VisualPoint* p : it->second) f(*p);
+}
+
 VisualPoint* VisualMap::find(std::int64_t id) {
   const auto it = by_id_.find(id);
   return it == by_id_.end() ? nullptr : it->second.get();

@@ -102,14 +102,14 @@ int VisualMap::scoreObservations(VisualPoint& p) const {
   return best;
 }
 
-void VisualMap::refine(VisualPoint& p, const VoxelMap* lidar_map) {
+void VisualMap::refine(VisualPoint& p, const PlaneFinder* lidar_map) {
   if (p.obs.empty()) {
     p.reference = -1;
     return;
   }
   bool normal_settled = false;
   if (!p.converged && lidar_map != nullptr && int(p.obs.size()) >= config_.refine_min_observations) {
-    VoxelMap::PlaneMatch match;
+    PlaneMatch match;
     PointWithCov query;
     query.p_world = p.p_world;
     query.cov_world = p.cov;

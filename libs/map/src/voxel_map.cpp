@@ -50,48 +50,15 @@ std::size_t VoxelMap::insert(const std::vector<PointWithCov>& points) {
 }
 
 bool VoxelMap::neighbourKey(const Vec3& p, VoxelKey& out) const {
-  // Position inside the voxel in units of the voxel edge, in [0, 1): metric, not index, coordinates
-  // (FAST-LIVO2 mixes the two, ALGORITHMS.md section 2 [quirk]).
-  const Vec3 scaled = p / config_.voxel_size_m;
-  const Vec3 fl(std::floor(scaled.x()), std::floor(scaled.y()), std::floor(scaled.z()));
-  const Vec3 frac = scaled - fl;
-  out = keyOf(p);
-  bool any = false;
-  std::int64_t* k[3] = {&out.x, &out.y, &out.z};
-  for (int i = 0; i < 3; ++i) {
-    if (frac[i] > 0.75) {
-      ++*k[i];
-      any = true;
-    } else if (frac[i] < 0.25) {
-      --*k[i];
-      any = true;
-    }
-  }
-  return any;
+  return neighbourVoxelKey(p, config_.voxel_size_m, out);
 }
 
 bool VoxelMap::searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const {
   const auto it = roots_.find(key);
   if (it == roots_.end()) return false;
-  const Vec3& p = pw.p_world;
-  const double sigma_num = config_.sigma_num;
   bool found = false;
   it->second->forEachPlane([&](const Plane& plane) {
-    const double dist = plane.signedDistance(p);
-    // In-plane distance gate: sqrt(|p - q|^2 - d^2) <= sigma_num * sqrt(lambda_max).
-    const double in_plane_sq = std::max((p - plane.center).squaredNorm() - dist * dist, 0.0);
-    const double r_gate = sigma_num * plane.radius;
-    if (in_plane_sq > r_gate * r_gate) return;
-    const double sigma_l = pointToPlaneVariance(plane, p, pw.cov_world);
-    if (!(sigma_l > 0.0)) return;
-    if (dist * dist >= sigma_num * sigma_num * sigma_l) return;  // |d| < sigma_num sqrt(sigma_l)
-    const double prob = std::exp(-0.5 * dist * dist / sigma_l) / std::sqrt(sigma_l);
-    if (found && prob <= out.probability) return;
-    out.plane = &plane;
-    out.distance = dist;
-    out.sigma_l = sigma_l;
-    out.probability = prob;
-    found = true;
+    if (scorePlaneCandidate(plane, pw, config_.sigma_num, found, out)) found = true;
   });
   return found;
 }
@@ -104,6 +71,13 @@ bool VoxelMap::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
   VoxelKey near;
   if (!neighbourKey(p, near)) return false;
   return searchVoxel(near, pw, out);
+}
+
+void VoxelMap::forEachPlaneIn(
+    const VoxelKey& key, const std::function<void(const Plane&, const std::array<std::int8_t, 3>&)>& f) const {
+  const auto it = roots_.find(key);
+  if (it == roots_.end()) return;
+  it->second->forEachPlaneWithPath([&](const Plane& plane, const std::array<std::int8_t, 3>& path) { f(plane, path); });
 }
 
 std::size_t VoxelMap::numPlanes() const {

@@ -24,6 +24,15 @@ class FrameSelector {
   /// Records the pose of a frame whose visual update ran.
   void markUsed(const NavState& x);
 
+  /// Step 3 of the pipeline: feeds one frame's sigma_min (frames with matches only) and returns
+  /// whether the LiDAR is degenerate: sigma_min below degeneracy_threshold for degenerate_frames
+  /// frames in a row.
+  bool degenerate(bool have_matches, double sigma_min) {
+    if (!have_matches) return false;
+    low_sigma_run_ = sigma_min < cfg_.degeneracy_threshold ? low_sigma_run_ + 1 : 0;
+    return low_sigma_run_ >= cfg_.degenerate_frames;
+  }
+
   /// Keyframe thresholds for a given sigma_min (translation m, rotation rad).
   double translationThreshold(double sigma_min) const;
   double rotationThreshold(double sigma_min) const;
@@ -32,6 +41,7 @@ class FrameSelector {
   SelectorConfig cfg_;
   VisualMode mode_;
   bool have_last_ = false;
+  int low_sigma_run_ = 0;  ///< consecutive frames with sigma_min below the threshold
   NavState last_;
 };
 

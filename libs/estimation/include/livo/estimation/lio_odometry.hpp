@@ -3,12 +3,14 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/timing.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/map/hybrid_map.hpp"
 #include "livo/map/voxel_map.hpp"
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace livo {
@@ -54,8 +56,28 @@ class LioOdometry {
   /// is not used, the map has its own configuration). Sliding and the memory cap are the map owner's
   /// business (HybridMap::update, e.g. by Pipeline).
   LioOdometry(LioOdometryConfig cfg, HybridMap& map);
-  /// Processes one frame in time order. Frames before the IMU is initialised only feed it.
+  /// Without a map: the map lives elsewhere (the map server). Only the phases below may be used;
+  /// process() and map() throw std::logic_error.
+  struct RemoteMapTag {};
+  LioOdometry(LioOdometryConfig cfg, RemoteMapTag);
+
+  /// Processes one frame in time order: predict(), update() against the map's LiDAR map, insertion of
+  /// worldPoints() into it. Frames before the IMU is initialised only feed it.
   LioFrameResult process(const Frame& frame);
+
+  // The phases of process(), for an estimator whose map is remote (steps 1-3, then 4, then 5 by the
+  // map's owner):
+  /// Steps 1-3: initialisation, propagation to the frame time, undistortion and downsampling. Returns
+  /// true when r.points wait for update() (r.state holds the prediction); false when there is
+  /// nothing to estimate (IMU not initialised yet, frame inside the initialisation window).
+  bool predict(const Frame& frame, LioFrameResult& r);
+  /// Step 4: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
+  /// r.P, r.lio_ms (since predict()) and the match results.
+  void update(LioFrameResult& r, const PlaneFinder& planes);
+  /// World points with covariance at the current posterior (what step 5 inserts).
+  std::vector<PointWithCov> worldPoints(const std::vector<BodyPoint>& pts) const;
+  /// Records that the frame's points went into the map (enables update() from the next frame on).
+  void markInserted(LioFrameResult& r);
 
   /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
   void setState(const NavState& x, const StateCov& P) {
@@ -64,7 +86,10 @@ class LioOdometry {
   }
   const LioOdometryConfig& config() const { return cfg_; }
   /// The LiDAR voxel map (the local map in hybrid mode).
-  const VoxelMap& map() const { return map_->lidarMap(); }
+  const VoxelMap& map() const {
+    if (map_ == nullptr) throw std::logic_error("LioOdometry::map: the map is remote");
+    return map_->lidarMap();
+  }
   const NavState& state() const { return x_; }
   const StateCov& covariance() const { return P_; }
   bool initialized() const { return init_.done(); }
@@ -72,17 +97,17 @@ class LioOdometry {
 
  private:
   std::vector<BodyPoint> preparePoints(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const;
-  void insertIntoMap(const std::vector<BodyPoint>& pts);
 
   LioOdometryConfig cfg_;
   ImuInitializer init_;
   std::unique_ptr<ImuPropagator> propagator_;
   std::unique_ptr<HybridMap> own_map_;  ///< standalone only
-  HybridMap* map_;                      ///< own_map_ or the external map
+  HybridMap* map_;                      ///< own_map_, the external map or null (remote)
   NavState x_;
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;
   bool map_started_ = false;
+  Stopwatch watch_;  ///< predict() to update()
   std::string init_message_;
 };
 

@@ -4,6 +4,7 @@
 
 #include "livo/common/config.hpp"
 #include "livo/estimation/state.hpp"
+#include "livo/map/plane_finder.hpp"
 #include "livo/map/voxel_map.hpp"
 
 #include <vector>
@@ -58,7 +59,7 @@ Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint&
 /// Iterated update: re-associates every point with the map in every iteration (information form,
 /// ALGORITHMS.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the
 /// posterior on return. With no match at all the state is left unchanged.
-LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const VoxelMap& map,
+LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
                             const LioConfig& cfg);
 
 /// Degeneracy metric (ALGORITHMS.md, top and section 9): with M = sum n n^T over the N matched unit

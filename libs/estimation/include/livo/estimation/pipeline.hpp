@@ -93,7 +93,6 @@ class Pipeline {
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
   FrameSelector selector_;
   std::size_t images_wrong_size_ = 0;
-  int low_sigma_run_ = 0;  ///< consecutive frames with sigma_min below the threshold
   std::size_t frames_ = 0;
 };
 

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "livo/io/convert.hpp"
+#include "livo/map/map_protocol.hpp"
 #include "livo/map/plane.hpp"
 #include "livo/map/point_cov.hpp"
 #include "livo/map/visual_point.hpp"
@@ -30,70 +31,13 @@
 
 namespace livo {
 
-/// Estimator -> map server: what the next frame needs (map_query_t).
-struct MapQuery {
-  Utime utime = 0;
-  std::int64_t request_id = 0;             ///< echoed by the submap; strictly increasing
-  Pose T_world_imu = Pose::Identity();     ///< predicted IMU pose
-  double radius_m = 0.0;                   ///< planes wanted within this distance of the IMU, m
-  std::vector<VoxelKey> keys;              ///< root voxels touched by the predicted scan (must fit int32)
-  bool want_visual = false;                ///< the frame will run a visual update
-  Pose T_world_camera = Pose::Identity();  ///< predicted camera pose (always sent, always validated)
-  double max_visual_depth_m = 0.0;         ///< m
-};
-
-/// One plane leaf of a submap (plane_t). `plane.d` is recomputed as -n^T q on the way in; `plane.layer`
-/// mirrors `layer`; eig_max = radius^2, eig_mid = 0 (not transmitted) and is_plane = true.
-struct SubmapPlane {
-  VoxelKey key;                                 ///< root voxel (must fit int32)
-  int layer = 0;                                ///< octree layer of the leaf, 0..3 (0 = root)
-  std::array<std::int8_t, 3> octant{{-1, -1, -1}};  ///< child path: octant[l] in 0..7 for l < layer, else -1
-  Plane plane;
-  bool frozen = false;                          ///< no longer updated
-};
-
-/// Map server -> estimator: the answer to a MapQuery (submap_t).
-struct Submap {
-  Utime utime = 0;               ///< utime of the query
-  std::int64_t request_id = 0;   ///< request_id of the query
-  double voxel_size_m = 0.5;     ///< root voxel edge, m (> 0)
-  std::vector<SubmapPlane> planes;
-  std::vector<VisualPoint> visual_points;
-};
-
-/// Estimator -> map server after a frame (map_update_t). Points travel as float world coordinates.
-struct MapUpdate {
-  Utime utime = 0;
-  std::int64_t request_id = 0;  ///< of the frame's query
-  Pose T_world_imu = Pose::Identity();
-  std::vector<PointWithCov> points;
-  std::vector<VisualPoint> new_visual_points;
-  std::vector<std::pair<std::int64_t, VisualObservation>> observations;  ///< (visual point id, observation)
-};
-
-/// Map server health (map_stats_t); every count >= 0.
-struct MapStats {
-  Utime utime = 0;                          ///< latest message time seen
-  std::int64_t local_voxels = 0;            ///< root voxels in the local map
-  std::int64_t local_planes = 0;
-  std::int64_t visual_points_local = 0;
-  std::int64_t visual_points_longterm = 0;
-  std::int64_t bytes = 0;                   ///< accounted bytes of all map structures
-  std::int64_t bytes_cap = 0;               ///< memory cap, bytes (0 = none)
-  std::int64_t evicted_visual_points = 0;   ///< since start, by the memory cap
-  std::int64_t evicted_voxels = 0;          ///< since start, by the memory cap
-  std::int64_t slides = 0;                  ///< local map slides since start
-  std::int64_t queries_answered = 0;
-  float last_slide_ms = 0.f;
-};
-
 // ---- struct -> message. Counts come from the vectors. Keys that do not fit int32 throw
 // std::out_of_range naming the key; everything else is copied as is (validate() to check). ----
 /// patch_t: levels = PatchPyramid::kLevels (3), size = PatchPyramid::kCrop (12: the stored crop side,
 /// patch proper kSize = 8 plus kMargin on each side), num_values = 432.
 livo::patch_t toMsg(const VisualObservation& o);
-/// visual_point_t: position_cov as (xx, xy, xz, yy, yz, zz) of the symmetric part; bad_updates and
-/// last_seen are local map bookkeeping and are not sent (they come back as 0).
+/// visual_point_t: position_cov as (xx, xy, xz, yy, yz, zz) of the symmetric part; bad_updates travels
+/// (the outlier rule spans frames); last_seen is local map bookkeeping, not sent (comes back as 0).
 livo::visual_point_t toMsg(const VisualPoint& p);
 livo::plane_t toMsg(const SubmapPlane& p);
 livo::map_query_t toMsg(const MapQuery& q);

@@ -122,6 +122,20 @@ class HybridMap {
   /// True when `p` is held by the long-term map.
   bool isLongterm(const VisualPoint& p) const { return longterm_visual_.find(p.id) == &p; }
 
+  // --- Remote access (the map server's side of livo/map/map_protocol.hpp) ------------------------
+  /// Copies of every point of both visual maps in the given visual voxels (duplicate keys ignored),
+  /// appended to `out`; returns the count appended.
+  std::size_t copyVisualPointsIn(const std::vector<VoxelKey>& visual_keys, std::vector<VisualPoint>& out) const;
+  /// Replaces the point with p.id (in whichever map holds it) by `p`, or adds `p` to the local map
+  /// when the id is unknown; a `p` without observations removes the point instead. Returns false when
+  /// `p` was rejected (non-finite position, or a reference index outside its observations).
+  bool upsertVisualPoint(VisualPoint p);
+  /// Appends an observation to a point and refines it (VisualMap::refine with the local LiDAR map);
+  /// false when the id is unknown or the point is converged (frozen).
+  bool appendObservation(std::int64_t id, const VisualObservation& obs);
+  /// Ids below this are taken in either visual map.
+  std::int64_t nextVisualPointId() const { return std::max(local_visual_.nextId(), longterm_visual_.nextId()); }
+
   const VisualMap& localVisual() const { return local_visual_; }
   const VisualMap& longtermVisual() const { return longterm_visual_; }
   /// Direct access for tools and tests (e.g. inserting prepared points); the rules above still hold.
@@ -156,6 +170,11 @@ class HybridMap {
   const Vec3& longtermCenter() const { return longterm_center_; }
   std::size_t pendingWork() const;
   void clear();
+  /// Binary form of the map's content: LiDAR octrees and both visual maps (map_file.hpp). Counters,
+  /// cube centres and pending slide work are not saved: the first update() after load() centres the
+  /// cubes at the robot again.
+  void save(std::ostream& os) const;
+  void load(std::istream& is);
 
  private:
   struct Budget {

@@ -21,6 +21,7 @@
 #include "livo/map/visual_point.hpp"
 #include "livo/map/voxel_key.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -31,7 +32,7 @@
 namespace livo {
 
 class CameraModel;
-class VoxelMap;
+class PlaneFinder;
 
 /// Selection grid over the processed image: cells of cell_px x cell_px, the last row / column
 /// possibly partial (ceil), so every pixel has a cell. Cell index = row * cols + col.
@@ -121,8 +122,8 @@ class VisualMap {
   /// LiDAR plane's (VoxelMap::findBestPlane: its 3-radius and 3-sigma gates, the map's own voxel size),
   /// with the sign of the previous normal; when it moved less than normal_converge and the point has
   /// at least converge_min_observations observations it is converged: only the reference
-  /// observation is kept. `lidar_map` may be null (no normal refinement).
-  void refine(VisualPoint& p, const VoxelMap* lidar_map);
+  /// observation is kept. `lidar_map` may be null (no normal refinement); a VoxelMap or a PlaneIndex of submap planes.
+  void refine(VisualPoint& p, const PlaneFinder* lidar_map);
 
   /// Outlier bookkeeping (ALGORITHMS.md 5.5): an update with mean_sq_error > gate counts as bad,
   /// anything else resets the count of consecutive bad updates.
@@ -152,6 +153,12 @@ class VisualMap {
   /// Takes a point (e.g. from another VisualMap) keeping its id. Returns false (point dropped) when it
   /// is null, its position is not finite or its id is already used here. Later ids stay above it.
   bool insert(std::unique_ptr<VisualPoint> point);
+  /// Calls f for every point of one visual voxel (nothing when the voxel is empty).
+  void forEachInVoxel(const VoxelKey& key, const std::function<void(const VisualPoint&)>& f) const;
+  /// The id the next created point gets; raiseNextId() makes it at least `next` (ids below are taken
+  /// elsewhere, e.g. in a map server's maps).
+  std::int64_t nextId() const { return next_id_; }
+  void raiseNextId(std::int64_t next) { next_id_ = std::max(next_id_, next); }
   VisualPoint* find(std::int64_t id);
   const VisualPoint* find(std::int64_t id) const;
   void clear();

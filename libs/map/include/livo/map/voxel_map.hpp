@@ -8,12 +8,17 @@
 #pragma once
 
 #include "livo/map/plane.hpp"
+#include "livo/map/plane_finder.hpp"
 #include "livo/map/point_cov.hpp"
 #include "livo/map/voxel_key.hpp"
 #include "livo/map/voxel_map_config.hpp"
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
+#include <istream>
+#include <ostream>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -32,10 +37,10 @@ struct VoxelMapStats {
   std::size_t bytes = 0;          ///< estimate, see VoxelMap::bytes()
 };
 
-class VoxelMap {
+class VoxelMap : public PlaneFinder {
  public:
   explicit VoxelMap(VoxelMapConfig config = {});
-  ~VoxelMap();
+  ~VoxelMap() override;
   VoxelMap(VoxelMap&&) noexcept;
   VoxelMap& operator=(VoxelMap&&) noexcept;
   VoxelMap(const VoxelMap&) = delete;
@@ -46,12 +51,7 @@ class VoxelMap {
   /// |p| / voxel_size >= 2^52 are skipped. Returns the number of points taken.
   std::size_t insert(const std::vector<PointWithCov>& points);
 
-  struct PlaneMatch {
-    const Plane* plane = nullptr;
-    double distance = 0.0;     ///< signed n^T p + d, m
-    double sigma_l = 0.0;      ///< variance of the distance, m^2
-    double probability = 0.0;  ///< sigma_l^-1/2 exp(-d^2 / (2 sigma_l))
-  };
+  using PlaneMatch = livo::PlaneMatch;
   /// Most probable plane for a query point (ALGORITHMS.md section 2, "Association"): every plane
   /// leaf of the point's root voxel is a candidate when the in-plane distance
   /// sqrt(|p - q|^2 - d^2) <= sigma_num * radius and |d| < sigma_num * sqrt(sigma_l), with
@@ -59,7 +59,7 @@ class VoxelMap {
   /// sigma_l^-1/2 exp(-d^2 / 2 sigma_l) wins. If none is accepted (or the voxel does not exist), ONE
   /// neighbour root voxel is tried: step +1 along each axis where the point lies in the upper
   /// quarter of its voxel ((p/s - floor(p/s)) > 0.75), -1 where it lies in the lower quarter (< 0.25).
-  bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const;
+  bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const override;
 
   /// The neighbour key findBestPlane tries for `p`; false when p is in no outer quarter.
   bool neighbourKey(const Vec3& p, VoxelKey& out) const;
@@ -77,12 +77,26 @@ class VoxelMap {
   /// Calls f(key of the root voxel, plane) for every plane leaf.
   void forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const;
 
+  /// Calls f(plane, octant path) for every plane leaf of one root voxel (nothing when it does not
+  /// exist). The path holds the child index per layer below the root, -1 beyond the leaf's layer.
+  void forEachPlaneIn(const VoxelKey& key,
+                      const std::function<void(const Plane&, const std::array<std::int8_t, 3>&)>& f) const;
+  bool hasVoxel(const VoxelKey& key) const { return roots_.count(key) != 0; }
+
   /// Drops every root voxel whose centre lies outside the axis-aligned cube of half edge
   /// `half_edge_m` around `center` (|c_i - center_i| > half_edge_m on some axis). Returns the count.
   std::size_t removeOutsideBox(const Vec3& center, double half_edge_m);
   /// Drops one root voxel; returns 1 when it existed, else 0.
   std::size_t removeVoxel(const VoxelKey& key);
   void clear();
+  /// Binary form of every root voxel's octree (map_file.cpp). load() replaces the contents; it throws
+  /// std::runtime_error on malformed or truncated input (the map is then empty).
+  void save(std::ostream& os) const;
+  void load(std::istream& is);
+  /// Calls f(key) for every root voxel.
+  void forEachRoot(const std::function<void(const VoxelKey&)>& f) const {
+    for (const auto& kv : roots_) f(kv.first);
+  }
 
   const VoxelMapConfig& config() const { return config_; }
 

@@ -1,0 +1,107 @@
+// Steps 5-6 of the per-frame pipeline (photometric update, visual map update), written once for the
+// two places a visual map can be: the in-process hybrid map (Pipeline, livo-run) and the estimator's
+// per-frame copy of the visual points the map server sent (RemoteEstimator, livo-estimator).
+#pragma once
+
+#include "livo/estimation/lio_odometry.hpp"
+#include "livo/estimation/vio_update.hpp"
+#include "livo/map/hybrid_map.hpp"
+#include "livo/map/plane_finder.hpp"
+#include "livo/map/visual_map.hpp"
+#include "livo/sensors/camera_config.hpp"
+#include "livo/sensors/camera_model.hpp"
+
+#include <vector>
+
+namespace livo {
+
+/// The visual map operations the visual step needs (VisualMap / HybridMap semantics).
+class VisualMapOps {
+ public:
+  virtual ~VisualMapOps() = default;
+  virtual std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
+                                                 const std::vector<Vec3>& scan_points_world) = 0;
+  virtual const std::vector<bool>& occupiedCells() const = 0;
+  virtual ImageGrid gridFor(const CameraModel& cam) const = 0;
+  virtual void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate) = 0;
+  virtual bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
+                              float inv_exposure, Utime t) = 0;
+  virtual void refine(VisualPoint& p) = 0;
+  virtual std::size_t removeBadPoints() = 0;
+  virtual int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
+                        Utime t, const std::vector<NewPointCandidate>& candidates,
+                        const std::vector<bool>& occupied_cells) = 0;
+};
+
+/// VisualMapOps on a HybridMap (both visual maps, refinement against its LiDAR map).
+class HybridVisualOps : public VisualMapOps {
+ public:
+  explicit HybridVisualOps(HybridMap& map) : map_(map) {}
+  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T, const std::vector<Vec3>& scan) override {
+    return map_.pointsInView(cam, T, scan);
+  }
+  const std::vector<bool>& occupiedCells() const override { return map_.occupiedCells(); }
+  ImageGrid gridFor(const CameraModel& cam) const override { return map_.gridFor(cam); }
+  void reportPhotometricError(VisualPoint& p, double e, double gate) override { map_.reportPhotometricError(p, e, gate); }
+  bool addObservation(VisualPoint& p, const Image& g, const Pose& T, const Vec2& px, float tau, Utime t) override {
+    return map_.addObservation(p, g, T, px, tau, t);
+  }
+  void refine(VisualPoint& p) override { map_.refine(p); }
+  std::size_t removeBadPoints() override { return map_.removeBadPoints(); }
+  int addPoints(const Image& g, const CameraModel& cam, const Pose& T, float tau, Utime t,
+                const std::vector<NewPointCandidate>& c, const std::vector<bool>& occ) override {
+    return map_.addPoints(g, cam, T, tau, t, c, occ);
+  }
+
+ private:
+  HybridMap& map_;
+};
+
+/// VisualMapOps on one VisualMap, refining normals against `planes` (may be null).
+class SingleVisualOps : public VisualMapOps {
+ public:
+  SingleVisualOps(VisualMap& map, const PlaneFinder* planes) : map_(map), planes_(planes) {}
+  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T, const std::vector<Vec3>& scan) override {
+    return map_.pointsInView(cam, T, scan);
+  }
+  const std::vector<bool>& occupiedCells() const override { return map_.occupiedCells(); }
+  ImageGrid gridFor(const CameraModel& cam) const override { return map_.gridFor(cam); }
+  void reportPhotometricError(VisualPoint& p, double e, double gate) override { map_.reportPhotometricError(p, e, gate); }
+  bool addObservation(VisualPoint& p, const Image& g, const Pose& T, const Vec2& px, float tau, Utime t) override {
+    return map_.addObservation(p, g, T, px, tau, t);
+  }
+  void refine(VisualPoint& p) override { map_.refine(p, planes_); }
+  std::size_t removeBadPoints() override { return map_.removeBadPoints(); }
+  int addPoints(const Image& g, const CameraModel& cam, const Pose& T, float tau, Utime t,
+                const std::vector<NewPointCandidate>& c, const std::vector<bool>& occ) override {
+    return map_.addPoints(g, cam, T, tau, t, c, occ);
+  }
+
+ private:
+  VisualMap& map_;
+  const PlaneFinder* planes_;
+};
+
+/// The frame's image at the processing scale of `cam`: `frame_image` itself when it already has the
+/// model's size, else a resized copy in `scratch` when it has the calibrated size and a scale is set.
+/// Null when the image is not the calibrated camera's (wrong size: never read it with this model).
+const Image* processingImage(const Image& frame_image, const CameraConfig& cfg, const CameraModel& cam, Image& scratch);
+
+/// World points of the frame's body points at state `x`.
+std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& points);
+
+struct VisualStepResult {
+  VioUpdateResult update;
+  std::vector<VisualPoint*> points;  ///< the points in view that were used (valid until the map changes)
+  int n_new_points = 0;
+  std::size_t removed_bad = 0;
+};
+
+/// Steps 5-6 at the LiDAR posterior (x, P): retrieval of the points in view of the scan, the
+/// photometric update (x, P become its posterior when a point was used), then at the posterior the
+/// photometric error bookkeeping, new observations + refinement, removal of bad points and new
+/// points from the plane-matched LiDAR points in free cells.
+VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+                               const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio);
+
+}  // namespace livo

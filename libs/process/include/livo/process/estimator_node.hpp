@@ -1,0 +1,78 @@
+// Core of livo-estimator: LIVO_FRAME in; per frame LIVO_MAP_QUERY out and LIVO_SUBMAP back (request
+// ids, a timeout), then LIVO_MAP_UPDATE, LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and LIVO_ESTIMATOR_STATS
+// out (RemoteEstimator, livo/estimation/remote_estimator.hpp, does the estimation).
+//
+// Frames are queued by the LCM handler and processed by poll() outside any handler; while a frame
+// waits for its submap, poll() handles LCM messages (frames keep being queued; other answers are
+// counted as late and dropped). A query without an answer within map_timeout_ms makes the frame
+// continue with the planes it has (reported in the stats and the odometry status); after
+// `fast_timeouts_after` consecutive timeouts the wait shrinks to fast_timeout_ms until the map server
+// answers again, so a dead map server slows nothing down for long. Config section `estimator`.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/remote_estimator.hpp"
+#include "livo/io/channels.hpp"
+#include "livo/process/lcm_node.hpp"
+
+#include <cstdint>
+#include <deque>
+#include <ostream>
+#include <string>
+
+namespace livo {
+
+struct EstimatorNodeConfig {
+  double map_timeout_ms = 250.0;   ///< wait for a submap, ms (wall clock: a network answer)
+  double fast_timeout_ms = 20.0;   ///< wait after fast_timeouts_after timeouts in a row, ms
+  int fast_timeouts_after = 3;
+  int max_queued_frames = 100;     ///< older frames beyond this are dropped (counted, warned)
+  void load(const ConfigNode& section);  ///< section `estimator`
+};
+
+class EstimatorNode : public MapClient {
+ public:
+  EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNodeConfig cfg, const ChannelConfig& channels,
+                std::ostream* log);
+  /// Processes the queued frames (call from the event loop, outside LCM handlers). Returns the count.
+  std::size_t poll();
+
+  // MapClient over LCM.
+  bool request(const MapQuery& q, Submap& out) override;
+  void send(const MapUpdate& u) override;
+
+  struct Counters {
+    std::uint64_t frames = 0;             ///< processed
+    std::uint64_t frames_dropped = 0;     ///< queue overflow
+    std::uint64_t odometry_published = 0;
+    std::uint64_t queries = 0, timeouts = 0, late_submaps = 0, invalid_submaps = 0;
+    std::uint64_t query_bytes = 0, submap_bytes = 0, update_bytes = 0;
+    double max_round_trip_ms = 0.0, sum_round_trip_ms = 0.0;
+    std::uint64_t answered = 0;
+    std::uint64_t nonfinite_points = 0;
+    Utime last_utime = 0;
+  };
+  const Counters& counters() const { return counters_; }
+  const RemoteEstimator& estimator() const { return estimator_; }
+  std::string progressLine() const;
+  std::string summary() const;
+
+ private:
+  void processFrame(const Frame& f, std::size_t nonfinite);
+
+  LcmNode& lcm_;
+  EstimatorNodeConfig cfg_;
+  ChannelConfig channels_;
+  std::ostream* log_;
+  RemoteEstimator estimator_;
+  std::deque<std::pair<Frame, std::size_t>> queue_;
+  bool in_poll_ = false;
+  // Pending request.
+  std::int64_t waiting_for_ = -1;
+  bool answered_ = false;
+  Submap answer_;
+  int timeouts_in_row_ = 0;
+  Counters counters_;
+};
+
+}  // namespace livo

@@ -1,0 +1,189 @@
+#include "livo/process/estimator_node.hpp"
+
+#include "livo/common/timing.hpp"
+#include "livo/io/estimator_messages.hpp"
+#include "livo/io/map_messages.hpp"
+#include "livo/process/scan_colour.hpp"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+namespace livo {
+
+void EstimatorNodeConfig::load(const ConfigNode& s) {
+  s.get("map_timeout_ms", map_timeout_ms)
+      .get("fast_timeout_ms", fast_timeout_ms)
+      .get("fast_timeouts_after", fast_timeouts_after)
+      .get("max_queued_frames", max_queued_frames);
+  s.check(map_timeout_ms > 0 && map_timeout_ms <= 60000, "map_timeout_ms", "must be in (0, 60000]");
+  s.check(fast_timeout_ms > 0 && fast_timeout_ms <= map_timeout_ms, "fast_timeout_ms",
+          "must be in (0, map_timeout_ms]");
+  s.check(fast_timeouts_after >= 1, "fast_timeouts_after", "must be >= 1");
+  s.check(max_queued_frames >= 1 && max_queued_frames <= 100000, "max_queued_frames", "must be in [1, 100000]");
+}
+
+EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNodeConfig cfg,
+                             const ChannelConfig& channels, std::ostream* log)
+    : lcm_(lcm), cfg_(cfg), channels_(channels), log_(log), estimator_(std::move(pipeline)) {
+  lcm_.subscribe<livo::frame_t>(channels_.frame, [this](const livo::frame_t& m) {
+    std::pair<Frame, std::size_t> item;
+    Validation v = fromMsg(m, item.first, lcm_.limits(), &item.second);
+    if (!v) return v;
+    if (int(queue_.size()) >= cfg_.max_queued_frames) {
+      queue_.pop_front();
+      if (shouldWarn(++counters_.frames_dropped) && log_)
+        *log_ << "livo-estimator: warning: frame queue full (" << cfg_.max_queued_frames
+              << "), dropped the oldest frame (" << counters_.frames_dropped << " so far)\n";
+    }
+    queue_.push_back(std::move(item));
+    return Validation::ok();
+  });
+  lcm_.subscribe<livo::submap_t>(channels_.submap, [this](const livo::submap_t& m) {
+    if (m.request_id != waiting_for_ || answered_) {
+      ++counters_.late_submaps;  // an answer nobody waits for any more (or a duplicate)
+      return Validation::ok();
+    }
+    Submap s;
+    Validation v = fromMsg(m, s, lcm_.limits());
+    if (!v) {
+      ++counters_.invalid_submaps;
+      return v;
+    }
+    counters_.submap_bytes += std::uint64_t(m.getEncodedSize());
+    answer_ = std::move(s);
+    answered_ = true;
+    return Validation::ok();
+  });
+}
+
+bool EstimatorNode::request(const MapQuery& q, Submap& out) {
+  const livo::map_query_t m = toMsg(q);
+  counters_.query_bytes += std::uint64_t(m.getEncodedSize());
+  waiting_for_ = q.request_id;
+  answered_ = false;
+  ++counters_.queries;
+  Stopwatch rt;
+  lcm_.publish(channels_.map_query, m);
+  const double limit = timeouts_in_row_ >= cfg_.fast_timeouts_after ? cfg_.fast_timeout_ms : cfg_.map_timeout_ms;
+  while (!answered_) {
+    const double left = limit - rt.elapsedMs();
+    if (left <= 0) break;
+    lcm_.handleOnce(std::max(1, int(left)));
+  }
+  waiting_for_ = -1;
+  if (!answered_) {
+    ++counters_.timeouts;
+    ++timeouts_in_row_;
+    if (shouldWarn(counters_.timeouts) && log_)
+      *log_ << "livo-estimator: warning: no submap for request " << q.request_id << " within " << limit
+            << " ms (" << counters_.timeouts << " timeouts so far); continuing with the planes it has\n";
+    return false;
+  }
+  const double ms = rt.elapsedMs();
+  counters_.max_round_trip_ms = std::max(counters_.max_round_trip_ms, ms);
+  counters_.sum_round_trip_ms += ms;
+  ++counters_.answered;
+  if (timeouts_in_row_ > 0 && log_) *log_ << "livo-estimator: the map server answers again\n";
+  timeouts_in_row_ = 0;
+  out = std::move(answer_);
+  return true;
+}
+
+void EstimatorNode::send(const MapUpdate& u) {
+  const livo::map_update_t m = toMsg(u);
+  counters_.update_bytes += std::uint64_t(m.getEncodedSize());
+  lcm_.publish(channels_.map_update, m);
+}
+
+std::size_t EstimatorNode::poll() {
+  if (in_poll_) return 0;  // request() handles messages: never re-enter
+  in_poll_ = true;
+  std::size_t n = 0;
+  while (!queue_.empty()) {
+    std::pair<Frame, std::size_t> item = std::move(queue_.front());
+    queue_.pop_front();
+    processFrame(item.first, item.second);
+    ++n;
+  }
+  in_poll_ = false;
+  return n;
+}
+
+void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
+  counters_.nonfinite_points += nonfinite;
+  const RemoteFrameResult r = estimator_.process(frame, *this);
+  const FrameResult& f = r.frame;
+  ++counters_.frames;
+  counters_.last_utime = frame.utime;
+
+  EstimatorStats st;
+  st.utime = frame.utime;
+  st.frame_index = std::int64_t(counters_.frames - 1);
+  st.lio_ms = float(f.lio.lio_ms);
+  st.vio_ms = float(f.vio_ms);
+  st.map_ms = float(r.wait_ms);
+  st.total_ms = float(f.total_ms);
+  st.sigma_min = float(std::max(0.0, f.lio.sigma_min));
+  st.degenerate = f.degenerate;
+  st.visual_used = f.visual_used;
+  st.map_timeout = r.map_timeout;
+  st.n_points = f.lio.n_points;
+  st.n_planes_matched = f.lio.n_matched;
+  st.n_visual_points = f.n_visual_points;
+  st.dropped_points = std::int32_t(std::min<std::size_t>(nonfinite, 0x7fffffff));
+  lcm_.publish(channels_.estimator_stats, toMsg(st));
+  if (!f.lio.initialized) return;  // no pose yet
+
+  OdometryOutput o;
+  o.utime = frame.utime;
+  o.state = f.lio.state;
+  o.pose_cov = f.lio.P.topLeftCorner<6, 6>();
+  o.pose_cov = 0.5 * (o.pose_cov + o.pose_cov.transpose()).eval();
+  o.status = 0;
+  if (f.degenerate) o.status |= odometry_status::kDegenerate;
+  if (f.visual_used) o.status |= odometry_status::kVisualUpdate;
+  if (r.map_timeout) o.status |= odometry_status::kMapTimeout;
+  if (f.lio.n_points > 0 && !f.lio.lio_ok && !f.lio.map_started) o.status |= odometry_status::kLidarFailed;
+  lcm_.publish(channels_.odometry, toMsg(o));
+  ++counters_.odometry_published;
+
+  if (!f.lio.points.empty()) {
+    const CameraModel* cam = estimator_.camera();
+    const PipelineConfig& pc = estimator_.config();
+    const RegisteredScan scan = colourScan(frame.utime, f.lio.state.pose(), f.lio.points, cam,
+                                           frame.has_image ? &frame.image : nullptr, pc.camera.T_imu_camera,
+                                           pc.camera.scale);
+    lcm_.publish(channels_.registered_scan, toMsg(scan));
+  }
+}
+
+std::string EstimatorNode::progressLine() const {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3) << "t " << toSeconds(counters_.last_utime) << " s: frames "
+     << counters_.frames << ", queued " << queue_.size() << ", queries " << counters_.queries << " (timeouts "
+     << counters_.timeouts << ", late answers " << counters_.late_submaps << "), rejected " << lcm_.totalRejected();
+  return os.str();
+}
+
+std::string EstimatorNode::summary() const {
+  std::ostringstream os;
+  const double answered = std::max<double>(1.0, double(counters_.answered));
+  os << std::fixed << std::setprecision(2);
+  os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
+     << counters_.odometry_published << "\n";
+  os << "map queries " << counters_.queries << ": answered " << counters_.answered << ", timeouts "
+     << counters_.timeouts << ", late answers " << counters_.late_submaps << ", invalid answers "
+     << counters_.invalid_submaps << "\n";
+  os << "round trip ms: mean " << counters_.sum_round_trip_ms / answered << ", max " << counters_.max_round_trip_ms
+     << "\n";
+  os << "bytes per message: query " << double(counters_.query_bytes) / std::max<double>(1.0, double(counters_.queries))
+     << ", submap " << double(counters_.submap_bytes) / answered << ", update "
+     << double(counters_.update_bytes) / std::max<double>(1.0, double(counters_.frames)) << "\n";
+  os << "voxel size mismatches " << estimator_.voxelSizeMismatches() << ", images of the wrong size "
+     << estimator_.imagesWrongSize() << ", non-finite points " << counters_.nonfinite_points << "\n";
+  os << "messages:\n" << lcm_.countersSummary();
+  return os.str();
+}
+
+}  // namespace livo

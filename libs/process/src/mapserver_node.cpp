@@ -1,0 +1,104 @@
+#include "livo/process/mapserver_node.hpp"
+
+#include "livo/io/map_messages.hpp"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+namespace livo {
+
+MapServerNode::MapServerNode(LcmNode& lcm, MapService& service, const ChannelConfig& channels, std::ostream* log,
+                             double stats_interval_s)
+    : lcm_(lcm), service_(service), channels_(channels), log_(log), stats_interval_s_(stats_interval_s) {
+  lcm_.subscribe<livo::map_query_t>(channels_.map_query, [this](const livo::map_query_t& m) { return onQuery(m); });
+  lcm_.subscribe<livo::map_update_t>(channels_.map_update, [this](const livo::map_update_t& m) { return onUpdate(m); });
+}
+
+Validation MapServerNode::onQuery(const livo::map_query_t& m) {
+  MapQuery q;
+  Validation v = fromMsg(m, q, lcm_.limits());
+  if (!v) return v;
+  const Submap s = service_.answer(q);
+  const livo::submap_t out = toMsg(s);
+  const auto bytes = std::uint64_t(out.getEncodedSize());
+  lcm_.publish(channels_.submap, out);
+  ++counters_.submaps_published;
+  counters_.submap_bytes += bytes;
+  counters_.max_submap_bytes = std::max(counters_.max_submap_bytes, bytes);
+  counters_.max_submap_planes = std::max<std::uint64_t>(counters_.max_submap_planes, s.planes.size());
+  counters_.max_submap_visual_points =
+      std::max<std::uint64_t>(counters_.max_submap_visual_points, s.visual_points.size());
+  maybeStats(q.utime);
+  return Validation::ok();
+}
+
+Validation MapServerNode::onUpdate(const livo::map_update_t& m) {
+  MapUpdate u;
+  Validation v = fromMsg(m, u, lcm_.limits());
+  if (!v) return v;
+  const double worst_before = service_.counters().max_update_ms;
+  const MapUpdateReport rep = service_.apply(u);
+  if (service_.counters().max_update_ms > worst_before) counters_.worst_update_utime = std::uint64_t(u.utime);
+  if (log_ && (rep.evicted_longterm_points + rep.evicted_local_points + rep.evicted_local_voxels) > 0 &&
+      shouldWarn(service_.map().counters().eviction_events))
+    *log_ << "livo-mapserver: memory cap: evicted " << rep.evicted_longterm_points << " long-term and "
+          << rep.evicted_local_points << " local visual points, " << rep.evicted_local_voxels
+          << " voxels (map now ~" << rep.bytes / (1 << 20) << " MiB)\n";
+  maybeStats(u.utime);
+  return Validation::ok();
+}
+
+void MapServerNode::maybeStats(Utime t) {
+  if (stats_interval_s_ <= 0) return;
+  if (!have_stats_time_) {
+    have_stats_time_ = true;
+    last_stats_utime_ = t;
+    return;
+  }
+  if (t < last_stats_utime_) last_stats_utime_ = t;  // time jumped back (new log): restart the clock
+  if (toSeconds(t - last_stats_utime_) < stats_interval_s_) return;
+  last_stats_utime_ = t;
+  publishStats();
+}
+
+void MapServerNode::publishStats() {
+  lcm_.publish(channels_.map_stats, toMsg(service_.stats()));
+  ++counters_.stats_published;
+}
+
+std::string MapServerNode::progressLine() const {
+  const MapServiceCounters& c = service_.counters();
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3) << "t " << toSeconds(service_.latestTime()) << " s: queries " << c.queries
+     << " (visual " << c.visual_queries << "), updates " << c.updates << ", map ~"
+     << service_.map().bytesEstimate() / (1 << 20) << " MiB, rejected " << lcm_.totalRejected();
+  return os.str();
+}
+
+std::string MapServerNode::summary() const {
+  const MapServiceCounters& c = service_.counters();
+  const HybridMapCounters& h = service_.map().counters();
+  const MapStats s = service_.stats();
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(2);
+  os << "queries " << c.queries << " (visual " << c.visual_queries << "), updates " << c.updates << " (stale "
+     << c.stale_updates << "), points inserted " << c.points_inserted << "\n";
+  os << "visual points: upserts " << c.visual_upserts << ", removals " << c.visual_removals << ", rejected "
+     << c.visual_rejected << ", observations " << c.observations_added << " (unknown ids " << c.observations_unknown
+     << ")\n";
+  os << "submaps: " << counters_.submaps_published << ", mean bytes "
+     << double(counters_.submap_bytes) / std::max<double>(1.0, double(counters_.submaps_published)) << ", max bytes "
+     << counters_.max_submap_bytes << ", max planes " << counters_.max_submap_planes << ", max visual points "
+     << counters_.max_submap_visual_points << "\n";
+  os << "map: voxels " << s.local_voxels << ", planes " << s.local_planes << ", visual points local "
+     << s.visual_points_local << " long-term " << s.visual_points_longterm << ", bytes " << s.bytes << " (cap "
+     << s.bytes_cap << ")\n";
+  os << "slides " << h.slides << " (worst " << h.max_slide_ms << " ms), evicted: voxels " << h.evicted_local_voxels
+     << ", visual points " << h.evicted_longterm_points + h.evicted_local_points << "; worst update "
+     << c.max_update_ms << " ms at t " << toSeconds(Utime(counters_.worst_update_utime)) << " s\n";
+  os << "messages:\n" << lcm_.countersSummary();
+  return os.str();
+}
+
+}  // namespace livo

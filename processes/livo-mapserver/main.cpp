@@ -1,0 +1,101 @@
+// livo-mapserver --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--map-mode hybrid|global]
+//                [--memory-cap-mb N] [--map-file FILE] [--report-interval S]
+//
+// Owns the map (local voxel plane map + visual maps; hybrid: sliding local cube and long-term visual
+// map, memory cap): answers LIVO_MAP_QUERY with LIVO_SUBMAP, applies LIVO_MAP_UPDATE, publishes
+// LIVO_MAP_STATS once per second of message time. With --map-file, loads FILE at start when it exists
+// and saves the map there on SIGINT / SIGTERM / --idle-exit, so a restarted server continues with it.
+#include "livo/common/config.hpp"
+#include "livo/estimation/pipeline.hpp"
+#include "livo/io/channels.hpp"
+#include "livo/map/map_file.hpp"
+#include "livo/process/cli.hpp"
+#include "livo/process/lcm_node.hpp"
+#include "livo/process/mapserver_node.hpp"
+#include "livo/process/stop_signal.hpp"
+
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+
+using namespace livo;
+
+int main(int argc, char** argv) {
+  installStopHandlers();
+  CommandLine cl("livo-mapserver",
+                 "--config CFG.yaml [--lcm-url URL] [--idle-exit S] [--map-mode M] [--memory-cap-mb N] "
+                 "[--map-file FILE] [--report-interval S]",
+                 "Serves the map to livo-estimator (LIVO_MAP_QUERY -> LIVO_SUBMAP, LIVO_MAP_UPDATE) and publishes\n"
+                 "LIVO_MAP_STATS at 1 Hz. Stops on SIGINT / SIGTERM with a summary (saving --map-file).");
+  ProcessArgs args;
+  std::string map_mode = "hybrid";
+  std::string map_file;
+  double cap_mb = -1.0;
+  double report_interval_s = 10.0;
+  addProcessOptions(cl, args);
+  cl.option("--map-mode", &map_mode, "M", "hybrid (default) | global (one unbounded map, FAST-LIVO2)");
+  cl.option("--memory-cap-mb", &cap_mb, "N", "memory cap of the map in MiB (0: none; default: config map.memory_cap_mb)");
+  cl.option("--map-file", &map_file, "FILE", "load the map from FILE at start (when it exists), save it there at exit");
+  cl.option("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)");
+  try {
+    if (!cl.parse(argc, argv)) return 0;
+    parseMapMode(map_mode);
+  } catch (const std::exception& e) {
+    std::cerr << "livo-mapserver: " << e.what() << " (--help for usage)\n";
+    return 2;
+  }
+
+  PipelineConfig pipe_cfg;
+  ChannelConfig channels;
+  try {
+    ConfigFile file = ConfigFile::load(args.config);
+    const ConfigNode root = file.root();
+    pipe_cfg.load(root);
+    channels.load(root.section("channels"));
+    checkSectionsUsed(file, {"channels", "map", "voxel_map"});
+  } catch (const std::exception& e) {
+    std::cerr << "livo-mapserver: " << e.what() << "\n";
+    return 2;
+  }
+
+  try {
+    HybridMapConfig map_cfg = pipe_cfg.map;
+    map_cfg.mode = parseMapMode(map_mode);
+    MapService service(map_cfg, pipe_cfg.lio.map, pipe_cfg.visual_map);
+    if (cap_mb >= 0) service.map().setMemoryCapMb(cap_mb);
+    if (!map_file.empty() && std::filesystem::exists(map_file)) {
+      const MapFileInfo info = loadMap(map_file, service.map());
+      std::cerr << "livo-mapserver: loaded " << map_file << ": " << info.describe() << "\n";
+    }
+    const std::string url = resolveLcmUrl(args.lcm_url);
+    LcmNode lcm(url, "livo-mapserver", &std::cerr);
+    MapServerNode node(lcm, service, channels, &std::cerr);
+    std::cerr << "livo-mapserver: " << map_mode << " map";
+    if (service.map().stats().cap_bytes > 0) std::cerr << ", cap " << service.map().stats().cap_bytes / (1 << 20) << " MiB";
+    std::cerr << "; " << channels.map_query << " -> " << channels.submap << ", " << channels.map_update << " on " << url
+              << "\n";
+    Utime last_report = 0;
+    const auto poll = [&]() {
+      const Utime t = service.latestTime();
+      if (report_interval_s > 0 && toSeconds(t - last_report) >= report_interval_s) {
+        std::cerr << "livo-mapserver: " << node.progressLine() << "\n";
+        last_report = t;
+      }
+    };
+    const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s, poll);
+    std::cerr << "livo-mapserver: "
+              << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
+                                                 : stopSignal() ? strsignal(stopSignal()) : "stop requested")
+              << ", stopping\n";
+    node.publishStats();
+    if (!map_file.empty()) {
+      const MapFileInfo info = saveMap(map_file, service.map());
+      std::cerr << "livo-mapserver: saved " << map_file << ": " << info.describe() << "\n";
+    }
+    std::cout << node.summary();
+  } catch (const std::exception& e) {
+    std::cerr << "livo-mapserver: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
