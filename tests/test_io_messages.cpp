@@ -52,6 +52,7 @@ VisualPoint randVisualPoint(int n_obs) {
   for (int i = 0; i < n_obs; ++i) p.obs.push_back(randObs());
   p.reference = n_obs > 0 ? int(uniInt(-1, n_obs - 1)) : -1;
   p.converged = uniInt(0, 1) == 1;
+  p.bad_updates = uniInt(0, 5);
   return p;
 }
 SubmapPlane randPlane() {
@@ -115,6 +116,7 @@ void expectVisualPointEq(const VisualPoint& a, const VisualPoint& b) {
   expectCov3AtFloat(a.cov, b.cov);
   EXPECT_EQ(a.reference, b.reference);
   EXPECT_EQ(a.converged, b.converged);
+  EXPECT_EQ(a.bad_updates, b.bad_updates);
   ASSERT_EQ(a.obs.size(), b.obs.size());
   for (std::size_t i = 0; i < a.obs.size(); ++i) expectObsEq(a.obs[i], b.obs[i]);
 }
@@ -140,6 +142,7 @@ Submap randSubmap(int planes, int points, int obs) {
   s.utime = 1'700'000'000'000'000;
   s.request_id = 42;
   s.voxel_size_m = 0.5;
+  s.next_visual_point_id = 1000 + points;
   for (int i = 0; i < planes; ++i) s.planes.push_back(randPlane());
   for (int i = 0; i < points; ++i) s.visual_points.push_back(randVisualPoint(obs));
   return s;
@@ -174,6 +177,7 @@ TEST(MapMessages, RoundTripQuerySubmapUpdateStats) {
   q.T_world_imu = randPose();
   q.radius_m = 40;
   for (int i = 0; i < 50; ++i) q.keys.push_back({uniInt(INT32_MIN, INT32_MAX), uniInt(-9, 9), uniInt(INT32_MIN, INT32_MAX)});
+  for (int i = 0; i < 20; ++i) q.visual_keys.push_back({uniInt(-9, 9), uniInt(INT32_MIN, INT32_MAX), uniInt(-9, 9)});
   q.want_visual = true;
   q.T_world_camera = randPose();
   q.max_visual_depth_m = 25;
@@ -184,6 +188,8 @@ TEST(MapMessages, RoundTripQuerySubmapUpdateStats) {
   EXPECT_EQ(qb.radius_m, q.radius_m);
   ASSERT_EQ(qb.keys.size(), q.keys.size());
   for (std::size_t i = 0; i < q.keys.size(); ++i) EXPECT_EQ(qb.keys[i], q.keys[i]);
+  ASSERT_EQ(qb.visual_keys.size(), q.visual_keys.size());
+  for (std::size_t i = 0; i < q.visual_keys.size(); ++i) EXPECT_EQ(qb.visual_keys[i], q.visual_keys[i]);
   EXPECT_TRUE(qb.want_visual);
   expectPoseNear(q.T_world_camera, qb.T_world_camera);
   EXPECT_EQ(qb.max_visual_depth_m, q.max_visual_depth_m);
@@ -193,6 +199,7 @@ TEST(MapMessages, RoundTripQuerySubmapUpdateStats) {
   EXPECT_EQ(sb.utime, s.utime);
   EXPECT_EQ(sb.request_id, s.request_id);
   EXPECT_EQ(sb.voxel_size_m, s.voxel_size_m);
+  EXPECT_EQ(sb.next_visual_point_id, s.next_visual_point_id);
   ASSERT_EQ(sb.planes.size(), s.planes.size());
   for (std::size_t i = 0; i < s.planes.size(); ++i) expectPlaneEq(s.planes[i], sb.planes[i]);
   ASSERT_EQ(sb.visual_points.size(), s.visual_points.size());
@@ -472,7 +479,7 @@ TEST(MessageConversions, ToMsgRejectsWhatTheMessageCannotCarry) {
 TEST(MapMessages, LargeSubmapEncodesAndDecodes) {
   constexpr std::size_t kPlaneBytes = 3 * 4 + 1 + 3 + 3 * 8 + 3 * 8 + 36 * 8 + 4 + 4 + 4 + 1;       // 365
   constexpr std::size_t kPatchBytes = 8 + 1 + 1 + 4 + 432 * 4 + 7 * 8 + 2 * 4 + 4 + 4;             // 1814
-  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4;                        // 89 + patches
+  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4 + 4;                    // 93 + patches
   std::size_t empty = 0;
   roundTrip<livo::submap_t>(Submap(), &empty);
   for (const int n_obs : {1, 8}) {

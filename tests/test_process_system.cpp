@@ -9,6 +9,7 @@
 
 #include "process_test_files.hpp"
 #include "process_test_streams.hpp"
+#include "process_test_children.hpp"
 
 #include <octomap/OcTree.h>
 #include <pcl/io/pcd_io.h>
@@ -32,94 +33,13 @@ using namespace livo;
 using test::countLines;
 using test::readFile;
 using test::tempDir;
+using test::Child;
+using test::Netns;
+using test::haveTool;
+using test::sleepS;
+using test::kBin;
+using test::kUrl;
 namespace fs = std::filesystem;
-
-namespace {
-
-const std::string kBin = std::string(LIVO_BINARY_DIR) + "/bin";
-const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
-
-void sleepS(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
-
-/// A child process with stdout and stderr in `log_path`.
-struct Child {
-  pid_t pid = -1;
-  int status = -1;
-  Child(const std::vector<std::string>& argv, const std::string& log_path) {
-    pid = ::fork();
-    if (pid == 0) {
-      const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        ::dup2(fd, 1);
-        ::dup2(fd, 2);
-      }
-      std::vector<char*> args;
-      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-      args.push_back(nullptr);
-      ::execvp(args[0], args.data());
-      ::_exit(127);
-    }
-  }
-  /// Waits up to `timeout_s` (then SIGKILL); returns the exit code, or -signal.
-  int wait(double timeout_s) {
-    if (pid <= 0) return status;
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < end) {
-      int st = 0;
-      if (::waitpid(pid, &st, WNOHANG) == pid) {
-        pid = -1;
-        return status = WIFEXITED(st) ? WEXITSTATUS(st) : -WTERMSIG(st);
-      }
-      sleepS(0.02);
-    }
-    ::kill(pid, SIGKILL);
-    int st = 0;
-    ::waitpid(pid, &st, 0);
-    pid = -1;
-    return status = 1000;  // timed out
-  }
-  void signal(int sig) const {
-    if (pid > 0) ::kill(pid, sig);
-  }
-  ~Child() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-};
-
-/// A private network namespace with multicast on its loopback device; `why` says why not.
-struct Netns {
-  std::string name = "livo_test_" + std::to_string(::getpid());
-  bool ok = false;
-  std::string why;
-  Netns() {
-    if (::geteuid() != 0) {
-      why = "not root: cannot create a network namespace";
-      return;
-    }
-    if (std::system(("ip netns add " + name + " 2>/dev/null").c_str()) != 0) {
-      why = "'ip netns add' failed (no iproute2 or no namespace support)";
-      return;
-    }
-    ok = std::system(("ip netns exec " + name + " ip link set lo up multicast on && ip netns exec " + name +
-                      " ip route add 224.0.0.0/4 dev lo")
-                         .c_str()) == 0;
-    if (!ok) why = "could not enable multicast on the namespace's loopback device";
-  }
-  ~Netns() {
-    if (::geteuid() == 0) (void)std::system(("ip netns del " + name + " 2>/dev/null").c_str());
-  }
-  std::vector<std::string> exec(std::vector<std::string> argv) const {
-    argv.insert(argv.begin(), {"ip", "netns", "exec", name});
-    return argv;
-  }
-};
-
-bool haveTool(const std::string& tool) { return std::system(("command -v " + tool + " >/dev/null 2>&1").c_str()) == 0; }
-
-}  // namespace
 
 // ---------------------------------------------------------------- command line of the binaries
 

@@ -110,8 +110,9 @@ bool walkPatch(Walker& w, const std::string& f) {
 
 bool walkVisualPoint(Walker& w, const std::string& f) {
   std::int32_t n = 0;
-  // id, position[3], normal[3], position_cov[6] (float), converged, reference; num_patches; patches
-  if (!(w.skip(8 + 24 + 24 + 24 + 1 + 4, f + ".header") &&
+  // id, position[3], normal[3], position_cov[6] (float), converged, bad_updates, reference; num_patches;
+  // patches
+  if (!(w.skip(8 + 24 + 24 + 24 + 1 + 4 + 4, f + ".header") &&
         w.count(f + ".num_patches", w.lim().max_patches_per_point, 8 + 2 + 4 + 72, n)))
     return false;
   for (std::int32_t i = 0; i < n; ++i)
@@ -120,18 +121,21 @@ bool walkVisualPoint(Walker& w, const std::string& f) {
 }
 
 bool walkQuery(Walker& w, const std::string& f) {
-  std::int32_t n = 0;
-  // utime, request_id, position[3], orientation[4], radius_m; num_keys; key_x/y/z; want_visual, T[7], depth
+  std::int32_t n = 0, nv = 0;
+  // utime, request_id, position[3], orientation[4], radius_m; num_keys; key_x/y/z; num_visual_keys;
+  // visual_key_x/y/z; want_visual, T[7], depth
   return w.skip(8 + 8 + 24 + 32 + 8, f + ".header") && w.count(f + ".num_keys", w.lim().max_points, 12, n) &&
-         w.skip(std::size_t(n) * 12, f + ".key_xyz") && w.skip(1 + 56 + 8, f + ".camera");
+         w.skip(std::size_t(n) * 12, f + ".key_xyz") &&
+         w.count(f + ".num_visual_keys", w.lim().max_points, 12, nv) &&
+         w.skip(std::size_t(nv) * 12, f + ".visual_key_xyz") && w.skip(1 + 56 + 8, f + ".camera");
 }
 
 bool walkSubmap(Walker& w, const std::string& f) {
   std::int32_t np = 0, nv = 0;
   const std::size_t plane = fixedSize<livo::plane_t>();
   if (!(w.skip(24, f + ".header") && w.count(f + ".num_planes", w.lim().max_planes, plane, np) &&
-        w.skip(std::size_t(np) * plane, f + ".planes") &&
-        w.count(f + ".num_visual_points", w.lim().max_visual_points, 85 + 4, nv)))
+        w.skip(std::size_t(np) * plane, f + ".planes") && w.skip(8, f + ".next_visual_point_id") &&
+        w.count(f + ".num_visual_points", w.lim().max_visual_points, 89 + 4, nv)))
     return false;
   for (std::int32_t i = 0; i < nv; ++i)
     if (!walkVisualPoint(w, f + ".visual_points[" + std::to_string(i) + "]")) return false;
@@ -142,7 +146,7 @@ bool walkUpdate(Walker& w, const std::string& f) {
   std::int32_t np = 0, nv = 0, no = 0;
   if (!(w.skip(8 + 8 + 56, f + ".header") && w.count(f + ".num_points", w.lim().max_points, 36, np) &&
         w.skip(std::size_t(np) * 36, f + ".points") &&
-        w.count(f + ".num_new_visual_points", w.lim().max_visual_points, 85 + 4, nv)))
+        w.count(f + ".num_new_visual_points", w.lim().max_visual_points, 89 + 4, nv)))
     return false;
   for (std::int32_t i = 0; i < nv; ++i)
     if (!walkVisualPoint(w, f + ".new_visual_points[" + std::to_string(i) + "]")) return false;

@@ -3,6 +3,7 @@
 #include "livo/common/timing.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <tuple>
 
 namespace livo {
@@ -33,7 +34,19 @@ Submap MapService::answer(const MapQuery& q) {
     });
   }
   if (q.want_visual) {
+    // Only points in front of the predicted camera can be selected (VisualMap::pointsInView needs
+    // z >= min_depth_m): the others are not sent.
+    const std::size_t first = s.visual_points.size();
     map_.copyVisualPointsIn(q.visual_keys, s.visual_points);
+    const Pose T_camera_world = q.T_world_camera.inverse();
+    const double min_z = map_.localVisual().config().min_depth_m;
+    const double max_z = q.max_visual_depth_m > 0 ? q.max_visual_depth_m : std::numeric_limits<double>::infinity();
+    const auto behind = [&](const VisualPoint& p) {
+      const double z = (T_camera_world * p.p_world).z();
+      return !(z >= min_z && z <= max_z);
+    };
+    s.visual_points.erase(std::remove_if(s.visual_points.begin() + std::ptrdiff_t(first), s.visual_points.end(), behind),
+                          s.visual_points.end());
     ++counters_.visual_queries;
   }
   s.next_visual_point_id = map_.nextVisualPointId();

@@ -32,7 +32,9 @@ class MapService {
   MapService(HybridMapConfig map, VoxelMapConfig lidar, VisualMapConfig visual);
 
   /// The plane leaves of the queried root voxels (duplicates ignored; missing voxels give nothing) and,
-  /// with want_visual, every visual point of the queried visual voxels in either visual map.
+  /// with want_visual, every visual point of the queried visual voxels in either visual map that lies
+  /// in front of q.T_world_camera (depth >= the visual map's min_depth_m and, when
+  /// q.max_visual_depth_m > 0, <= it).
   Submap answer(const MapQuery& q);
   /// Inserts the points, applies the visual point changes and observations, then runs the map's
   /// per-frame maintenance at the update's position (HybridMap::update).
