@@ -1,0 +1,167 @@
+// The cores of livo-estimator and livo-mapserver (EstimatorNode, MapServerNode) talking over memq://
+// in one process: the protocol round trip (request ids, submaps, updates, 1 Hz map stats) gives the
+// single-process trajectory, and the estimator survives lost, duplicated and malformed answers.
+// livo-test-deps: livo_sim livo_eval livo_process
+#include "livo/io/estimator_messages.hpp"
+#include "livo/io/map_messages.hpp"
+#include "livo/process/estimator_node.hpp"
+#include "livo/process/mapserver_node.hpp"
+#include "remote_test_util.hpp"
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <sstream>
+
+using namespace livo;
+
+namespace {
+
+const livo_test::SimFrames& roomFrames() {
+  static const livo_test::SimFrames sf = livo_test::simulateFrames("room", 8.0, "adaptive");
+  return sf;
+}
+
+MapService makeService(const PipelineConfig& cfg) {
+  HybridMapConfig m = cfg.map;
+  m.mode = parseMapMode(cfg.map_mode);
+  return MapService(m, cfg.lio.map, cfg.visual_map);
+}
+
+/// What the estimator publishes.
+struct Outputs {
+  std::vector<OdometryOutput> odom;
+  std::vector<EstimatorStats> stats;
+  std::vector<MapStats> map_stats;
+  std::size_t scans = 0, coloured = 0;
+  explicit Outputs(LcmNode& lcm) {
+    lcm.subscribeStruct<livo::odometry_t, OdometryOutput>("LIVO_ODOMETRY", [this](OdometryOutput& o) { odom.push_back(o); });
+    lcm.subscribeStruct<livo::estimator_stats_t, EstimatorStats>("LIVO_ESTIMATOR_STATS",
+                                                                  [this](EstimatorStats& s) { stats.push_back(s); });
+    lcm.subscribeStruct<livo::map_stats_t, MapStats>("LIVO_MAP_STATS", [this](MapStats& s) { map_stats.push_back(s); });
+    lcm.subscribeStruct<livo::registered_scan_t, RegisteredScan>("LIVO_REGISTERED_SCAN", [this](RegisteredScan& s) {
+      ++scans;
+      coloured += !s.rgb.empty();
+    });
+  }
+};
+
+/// Publishes every frame, lets the estimator process it (its requests handle the map traffic).
+void feed(LcmNode& lcm, EstimatorNode& node, const std::vector<Frame>& frames) {
+  for (const Frame& f : frames) {
+    lcm.publish("LIVO_FRAME", toMsg(f));
+    lcm.drain();
+    node.poll();
+    lcm.drain();  // outputs and the last update
+  }
+}
+
+EstimatorNodeConfig fastConfig() {
+  EstimatorNodeConfig c;
+  c.map_timeout_ms = 30;
+  c.fast_timeout_ms = 5;
+  return c;
+}
+
+}  // namespace
+
+TEST(EstimatorOverMemq, RoundTripGivesTheSingleProcessTrajectory) {
+  const livo_test::SimFrames& sf = roomFrames();
+  std::ostringstream log;
+  LcmNode lcm("memq://", "test", &log);
+  MapService service = makeService(sf.cfg);
+  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  EstimatorNode est(lcm, sf.cfg, EstimatorNodeConfig{}, ChannelConfig{}, &log);
+  Outputs out(lcm);
+  feed(lcm, est, sf.frames);
+
+  ASSERT_EQ(out.odom.size(), sf.single.size()) << log.str();
+  double worst = 0;
+  for (std::size_t i = 0; i < out.odom.size(); ++i) {
+    EXPECT_NEAR(toSeconds(out.odom[i].utime), sf.single[i].t, 1e-6);
+    worst = std::max(worst, (out.odom[i].state.pose().translation() - sf.single[i].T_world_body.translation()).norm());
+  }
+  std::cout << "memq round trip: " << out.odom.size() << " poses, max difference to the single process " << worst * 1e3
+            << " mm\n" << est.summary() << server.summary();
+  EXPECT_LE(worst, 0.02);
+  EXPECT_EQ(est.counters().timeouts, 0u);
+  EXPECT_EQ(est.counters().late_submaps, 0u);
+  EXPECT_EQ(out.stats.size(), sf.frames.size());
+  std::size_t visual = 0;
+  for (const auto& s : out.stats) visual += s.visual_used;
+  EXPECT_GT(visual, 5u);
+  EXPECT_EQ(service.counters().updates, out.odom.size()) << "one update per estimated frame";
+  server.publishStats();
+  lcm.drain();
+  EXPECT_GE(out.map_stats.size(), 6u) << "LIVO_MAP_STATS at 1 Hz of message time over 8 s";
+  ASSERT_FALSE(out.map_stats.empty());
+  EXPECT_GT(out.map_stats.back().local_voxels, 100);
+  EXPECT_GT(out.map_stats.back().visual_points_local, 50);
+  EXPECT_EQ(out.map_stats.back().queries_answered, std::int64_t(service.counters().queries));
+  EXPECT_EQ(out.scans, out.odom.size());
+  EXPECT_GT(out.coloured, 0u) << "registered scans carry the camera's gray where it saw the points";
+}
+
+TEST(EstimatorOverMemq, LostDuplicatedAndMalformedAnswersNeverStallIt) {
+  const livo_test::SimFrames& sf = roomFrames();
+  std::ostringstream log;
+  LcmNode lcm("memq://", "test", &log);
+  MapService service = makeService(sf.cfg);
+  // A map server that loses every 5th answer, sends every 7th twice and garbage after every 11th.
+  std::size_t dropped = 0, duplicated = 0, garbage = 0;
+  lcm.subscribeStruct<livo::map_query_t, MapQuery>("LIVO_MAP_QUERY", [&](MapQuery& q) {
+    if (q.request_id % 5 == 0) {
+      ++dropped;
+      return;
+    }
+    const livo::submap_t m = toMsg(service.answer(q));
+    lcm.publish("LIVO_SUBMAP", m);
+    if (q.request_id % 7 == 0) {
+      lcm.publish("LIVO_SUBMAP", m);
+      ++duplicated;
+    }
+    if (q.request_id % 11 == 0) {
+      const std::uint8_t junk[13] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13};
+      lcm.publishRaw("LIVO_SUBMAP", junk, sizeof(junk));
+      ++garbage;
+    }
+  });
+  lcm.subscribeStruct<livo::map_update_t, MapUpdate>("LIVO_MAP_UPDATE", [&](MapUpdate& u) { service.apply(u); });
+  EstimatorNode est(lcm, sf.cfg, fastConfig(), ChannelConfig{}, &log);
+  Outputs out(lcm);
+  feed(lcm, est, sf.frames);
+
+  ASSERT_EQ(out.odom.size(), sf.single.size()) << "a pose for every frame despite the lost answers\n" << log.str();
+  EXPECT_EQ(est.counters().timeouts, dropped);
+  EXPECT_GE(est.counters().late_submaps, duplicated);
+  EXPECT_GT(garbage, 0u);
+  EXPECT_GE(lcm.counters().at("LIVO_SUBMAP").rejected, 1u) << "garbage is rejected, not decoded";
+  std::size_t flagged = 0, status = 0;
+  for (const auto& s : out.stats) flagged += s.map_timeout;
+  for (const auto& o : out.odom) status += (o.status & odometry_status::kMapTimeout) != 0;
+  EXPECT_GT(flagged, 0u);
+  EXPECT_EQ(status, flagged) << "the odometry status reports the frames without an answer";
+  EXPECT_NE(log.str().find("no submap for request"), std::string::npos) << log.str();
+  // Continuing with the planes it had keeps the trajectory close to the undisturbed one.
+  const double e = livo_test::ateRmse(sf.gt, [&] {
+    Trajectory t;
+    for (const auto& o : out.odom) t.push_back({toSeconds(o.utime), o.state.pose()});
+    return t;
+  }());
+  std::cout << dropped << " answers lost, " << duplicated << " duplicated, " << garbage << " garbage: ATE " << e * 100
+            << " cm\n";
+  EXPECT_LE(e, 0.05);
+}
+
+TEST(EstimatorOverMemq, NoMapServerAtAllStillPublishesOdometry) {
+  const livo_test::SimFrames& sf = roomFrames();
+  std::ostringstream log;
+  LcmNode lcm("memq://", "test", &log);
+  EstimatorNode est(lcm, sf.cfg, fastConfig(), ChannelConfig{}, &log);
+  Outputs out(lcm);
+  std::vector<Frame> first(sf.frames.begin(), sf.frames.begin() + 30);
+  feed(lcm, est, first);
+  EXPECT_GT(out.odom.size(), 15u) << "IMU propagation only, flagged";
+  EXPECT_EQ(est.counters().timeouts, out.odom.size()) << "one unanswered query per estimated frame";
+  for (const auto& o : out.odom) EXPECT_TRUE(o.status & odometry_status::kMapTimeout);
+}
