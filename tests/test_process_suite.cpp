@@ -14,6 +14,7 @@
 
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -157,4 +158,37 @@ TEST(SuiteNetns, MapServerKilledAndRestartedEstimatorRecovers) {
   const double e = ate(readTum(d.gt), split);
   std::cout << "demo with the map server killed for ~1 s: ATE " << e * 100 << " cm (" << split.size() << " poses)\n";
   EXPECT_LE(e, 0.15) << "the estimator recovers on the rebuilt map";
+}
+
+TEST(SuiteBinaries, HelpAndErrorsNameTheProblem) {
+  const std::string dir = test::tempDir("suite_cli");
+  auto run = [&](const std::string& cmd) {
+    const int rc = std::system((cmd + " > " + dir + "/out.txt 2>&1").c_str());
+    return std::make_pair(WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFile(dir + "/out.txt"));
+  };
+  const std::string cfg = std::string(LIVO_SOURCE_DIR) + "/config/avia.yaml";
+  auto [rc, out] = run(kBin + "/livo-estimator --help");
+  EXPECT_EQ(rc, 0);
+  EXPECT_NE(out.find("--visual-mode"), std::string::npos) << out;
+  std::tie(rc, out) = run(kBin + "/livo-mapserver --help");
+  EXPECT_EQ(rc, 0);
+  EXPECT_NE(out.find("--memory-cap-mb"), std::string::npos) << out;
+  std::tie(rc, out) = run(kBin + "/livo-mapserver --config " + cfg + " --lcm-url memq:// --map-mode bogus");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("'bogus'"), std::string::npos) << out;
+  std::tie(rc, out) = run(kBin + "/livo-estimator --config " + cfg + " --lcm-url memq:// --visual-mode sometimes");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("'sometimes'"), std::string::npos) << out;
+  std::ofstream(dir + "/junk.map") << "junk";
+  std::tie(rc, out) = run(kBin + "/livo-mapserver --config " + cfg + " --lcm-url memq:// --map-file " + dir + "/junk.map");
+  EXPECT_EQ(rc, 1);
+  EXPECT_NE(out.find("map file " + dir + "/junk.map: not a livo map file"), std::string::npos) << out;
+  std::string text = readFile(cfg);
+  const std::string key = "map_timeout_ms: 250.0";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.replace(text.find(key), key.size(), "map_timeout_ms: -1");
+  std::ofstream(dir + "/bad.yaml") << text;
+  std::tie(rc, out) = run(kBin + "/livo-estimator --config " + dir + "/bad.yaml --lcm-url memq://");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(out.find("estimator.map_timeout_ms"), std::string::npos) << out;
 }

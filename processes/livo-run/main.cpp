@@ -13,6 +13,7 @@
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
 #include "livo/map/visual_point.hpp"
+#include "livo/process/estimator_node.hpp"
 #include "livo/process/map_export.hpp"
 #include "livo/process/scan_colour.hpp"
 
@@ -95,6 +96,7 @@ int main(int argc, char** argv) {
     pipe_cfg.load(root);
     channels.load(root.section("channels"));
     export_cfg.load(root.section("exporter"));
+    EstimatorNodeConfig{}.load(root.section("estimator"));  // livo-estimator's section: checked, not used here
     file.checkAllKeysUsed();
     pipe_cfg.visual_mode = args.visual_mode;
     pipe_cfg.map_mode = args.map_mode;

@@ -182,6 +182,7 @@ std::string EstimatorNode::summary() const {
      << double(counters_.update_bytes) / std::max<double>(1.0, double(counters_.frames)) << "\n";
   os << "voxel size mismatches " << estimator_.voxelSizeMismatches() << ", images of the wrong size "
      << estimator_.imagesWrongSize() << ", non-finite points " << counters_.nonfinite_points << "\n";
+  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();
 }

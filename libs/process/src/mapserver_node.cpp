@@ -1,5 +1,6 @@
 #include "livo/process/mapserver_node.hpp"
 
+#include "livo/common/timing.hpp"
 #include "livo/io/map_messages.hpp"
 
 #include <algorithm>
@@ -97,6 +98,7 @@ std::string MapServerNode::summary() const {
   os << "slides " << h.slides << " (worst " << h.max_slide_ms << " ms), evicted: voxels " << h.evicted_local_voxels
      << ", visual points " << h.evicted_longterm_points + h.evicted_local_points << "; worst update "
      << c.max_update_ms << " ms at t " << toSeconds(Utime(counters_.worst_update_utime)) << " s\n";
+  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();
 }

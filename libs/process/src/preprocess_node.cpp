@@ -1,5 +1,7 @@
 #include "livo/process/preprocess_node.hpp"
 
+#include "livo/common/timing.hpp"
+
 #include "livo/io/image_convert.hpp"
 
 #include <iomanip>
@@ -109,6 +111,7 @@ std::string PreprocessNode::summary() const {
   os << "non-finite points dropped in conversion " << counters_.nonfinite_points << ", images not convertible "
      << counters_.images_unconvertible << "\n";
   os << "recombiner:\n" << recombiner_.stats().summary() << "\n";
+  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   return os.str();
 }
 
