@@ -7,6 +7,7 @@ LIVO_JOBS="${LIVO_JOBS:-2}"
 
 # Debian bookworm packages the suite needs to build, test and inspect (lcm.pc needs libglib2.0-dev).
 # librosbag-storage-dev: `livo-convert rosbag` (optional at build time); libsensor-msgs-dev: its tests.
+# clang + libclang-rt-14-dev: the libFuzzer runs of tests/fuzz (ctest, scripts/fuzz).
 LIVO_PACKAGES=(
   build-essential cmake pkg-config ccache git
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
@@ -14,6 +15,7 @@ LIVO_PACKAGES=(
   default-jdk-headless libjchart2d-java
   librosbag-storage-dev libsensor-msgs-dev
   iproute2 python3 python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 log() { printf '[livo] %s\n' "$*" >&2; }

@@ -223,6 +223,8 @@ int main(int argc, char** argv) {
              {"imu_duplicates", pst.imu_duplicates}, {"imu_gaps", pst.imu_gaps},
              {"scans_out_of_order", pst.scans_out_of_order}, {"points_in", pst.points_in},
              {"points_nan", pst.points_nan}, {"points_emitted", pst.points_emitted},
+             {"scans_in", pst.scans_in}, {"scans_empty", pst.scans_empty}, {"imu_in", pst.imu_in},
+             {"images_in", pst.images_in}, {"images_invalid", pst.images_invalid},
              {"buffer_overflow_drops", pst.bufferOverflowDrops()}})
       counters["preprocess_" + k] = double(v);
     const HybridMapStats hs = pipeline.mapStats();

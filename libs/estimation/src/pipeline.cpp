@@ -50,10 +50,17 @@ FrameResult Pipeline::processFrame(const Frame& frame) {
   r.lio = odometry_.process(frame);
   // 3. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a row.
   r.degenerate = selector_.degenerate(r.lio.initialized && r.lio.n_matched > 0, r.lio.sigma_min);
-  // 4-6. Frame selection, photometric update, visual map update.
-  if (camera_ && frame.has_image && r.lio.initialized && r.lio.lio_ok &&
+  // 4-6. Frame selection, photometric update, visual map update. An image that is not the calibrated
+  // camera's size is never read with this model: counted, and the frame stays LiDAR-inertial.
+  Image scratch;
+  const Image* gray = nullptr;
+  if (camera_ && frame.has_image) {
+    gray = processingImage(frame.image, cfg_.camera, *camera_, scratch);
+    if (gray == nullptr) ++images_wrong_size_;
+  }
+  if (gray != nullptr && r.lio.initialized && r.lio.lio_ok &&
       selector_.select(r.lio.state, r.lio.sigma_min, r.degenerate)) {
-    visualStep(frame, r);
+    visualStep(frame, *gray, r);
   }
   // 7. Map maintenance at the frame's position: slides when due (their work spread over frames), the
   // memory cap. Visual point pointers of this frame are not used beyond this point.
@@ -63,21 +70,14 @@ FrameResult Pipeline::processFrame(const Frame& frame) {
   return r;
 }
 
-void Pipeline::visualStep(const Frame& frame, FrameResult& r) {
+void Pipeline::visualStep(const Frame& frame, const Image& gray, FrameResult& r) {
   Stopwatch watch;
   const CameraModel& cam = *camera_;
-  // The image at the processing scale (the camera model is already scaled).
-  Image scratch;
-  const Image* gray = processingImage(frame.image, cfg_.camera, cam, scratch);
-  if (gray == nullptr) {
-    ++images_wrong_size_;  // not the calibrated camera: never read it with this model
-    return;
-  }
   NavState x = odometry_.state();
   StateCov P = odometry_.covariance();
   HybridVisualOps ops(*map_);  // both the local and the long-term visual maps are searched
   const VisualStepResult vs =
-      runVisualStep(ops, x, P, *gray, cam, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, r.lio);
+      runVisualStep(ops, x, P, gray, cam, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, r.lio);
   if (vs.update.points_used > 0) odometry_.setState(x, P);
   selector_.markUsed(x);
   r.visual_used = true;

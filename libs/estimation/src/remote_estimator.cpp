@@ -107,8 +107,14 @@ RemoteFrameResult RemoteEstimator::process(const Frame& frame, MapClient& client
 
   // 3. Degeneracy; 4-6. frame selection, photometric update, visual map changes.
   f.degenerate = selector_.degenerate(f.lio.n_matched > 0, f.lio.sigma_min);
-  if (camera_ && frame.has_image && f.lio.lio_ok && selector_.select(f.lio.state, f.lio.sigma_min, f.degenerate))
-    visualStep(frame, r, client, update);
+  Image scratch;
+  const Image* gray = nullptr;
+  if (camera_ && frame.has_image) {
+    gray = processingImage(frame.image, cfg_.camera, *camera_, scratch);
+    if (gray == nullptr) ++images_wrong_size_;  // not the calibrated camera: never read it with this model
+  }
+  if (gray != nullptr && f.lio.lio_ok && selector_.select(f.lio.state, f.lio.sigma_min, f.degenerate))
+    visualStep(frame, *gray, r, client, update);
 
   // 7. The map changes, with the final pose.
   update.T_world_imu = f.lio.state.pose();
@@ -120,16 +126,11 @@ RemoteFrameResult RemoteEstimator::process(const Frame& frame, MapClient& client
   return r;
 }
 
-void RemoteEstimator::visualStep(const Frame& frame, RemoteFrameResult& r, MapClient& client, MapUpdate& update) {
+void RemoteEstimator::visualStep(const Frame& frame, const Image& gray, RemoteFrameResult& r, MapClient& client,
+                                 MapUpdate& update) {
   FrameResult& f = r.frame;
   Stopwatch watch;
   const CameraModel& cam = *camera_;
-  Image scratch;
-  const Image* gray = processingImage(frame.image, cfg_.camera, cam, scratch);
-  if (gray == nullptr) {
-    ++images_wrong_size_;  // not the calibrated camera: never read it with this model
-    return;
-  }
   // The visual points of the visual voxels the registered scan touches (both server maps).
   const double vs = cfg_.visual_map.voxel_size_m;
   MapQuery q;
@@ -162,7 +163,7 @@ void RemoteEstimator::visualStep(const Frame& frame, RemoteFrameResult& r, MapCl
   StateCov P = f.lio.P;
   SingleVisualOps ops(cache_, &planes_);
   const VisualStepResult step =
-      runVisualStep(ops, x, P, *gray, cam, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, f.lio);
+      runVisualStep(ops, x, P, gray, cam, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, f.lio);
   if (step.update.points_used > 0) lio_.setState(x, P);
   selector_.markUsed(x);
 

@@ -90,6 +90,9 @@ Validation validate(const livo::lidar_scan_t& m, const MessageLimits& lim) {
   LIVO_CHECK(checkSize(m.intensity, m.num_points, t + "intensity", "num_points"));
   LIVO_CHECK(checkSize(m.ring, m.num_points, t + "ring", "num_points"));
   if (m.utime < 0) return Validation::fail(t + "utime: negative time " + std::to_string(m.utime));
+  // LCM encodes strings up to the first NUL: an embedded one would not survive a re-encoding.
+  if (m.sensor.find('\0') != std::string::npos) return Validation::fail(t + "sensor: embedded NUL character");
+  if (m.sensor.size() > 256) return Validation::fail(t + "sensor: longer than 256 characters");
   // Per-point times must be usable: a scan longer than 10 s or before its start by > 1 s is corrupt.
   for (std::int32_t i = 0; i < m.num_points; ++i) {
     const float dt = m.time_offset_s[i];

@@ -86,6 +86,7 @@ inline Validation quaternion(const double* q, const char* field) {
   LIVO_MSG_CHECK(finite(q, 4, field));
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   if (!(norm > 1e-6)) return Validation::fail(std::string(field) + ": quaternion norm " + num(norm) + " is (near) zero");
+  if (!std::isfinite(norm)) return Validation::fail(std::string(field) + ": quaternion norm overflows (components too large)");
   return Validation::ok();
 }
 

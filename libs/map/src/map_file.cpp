@@ -288,11 +288,7 @@ MapFileInfo saveMap(const std::string& path, const HybridMap& map) {
   {
     std::ofstream os(tmp, std::ios::binary | std::ios::trunc);
     if (!os) throw std::runtime_error("map file " + tmp + ": cannot open for writing: " + std::strerror(errno));
-    os.write(kMagic, sizeof(kMagic));
-    put(os, kVersion);
-    put(os, map.lidarMap().config().voxel_size_m);
-    put(os, map.localVisual().config().voxel_size_m);
-    map.save(os);
+    saveMap(os, map);
     os.flush();
     if (!os) throw std::runtime_error("map file " + tmp + ": write failed: " + std::strerror(errno));
   }
@@ -302,9 +298,7 @@ MapFileInfo saveMap(const std::string& path, const HybridMap& map) {
   return infoOf(map, std::size_t(std::filesystem::file_size(path)));
 }
 
-MapFileInfo loadMap(const std::string& path, HybridMap& map) {
-  std::ifstream is(path, std::ios::binary);
-  if (!is) throw std::runtime_error("map file " + path + ": cannot open: " + std::strerror(errno));
+MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
   try {
     char magic[sizeof(kMagic)];
     if (!is.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
@@ -322,9 +316,26 @@ MapFileInfo loadMap(const std::string& path, HybridMap& map) {
     if (is.peek() != std::char_traits<char>::eof()) throw std::runtime_error("trailing bytes after the map");
   } catch (const std::exception& e) {
     map.clear();
-    throw std::runtime_error("map file " + path + ": " + e.what());
+    throw std::runtime_error("map file " + name + ": " + e.what());
   }
-  return infoOf(map, std::size_t(std::filesystem::file_size(path)));
+  return infoOf(map, 0);
+}
+
+MapFileInfo loadMap(const std::string& path, HybridMap& map) {
+  std::ifstream is(path, std::ios::binary);
+  if (!is) throw std::runtime_error("map file " + path + ": cannot open: " + std::strerror(errno));
+  MapFileInfo info = loadMap(is, path, map);
+  info.file_bytes = std::size_t(std::filesystem::file_size(path));
+  return info;
+}
+
+MapFileInfo saveMap(std::ostream& os, const HybridMap& map) {
+  os.write(kMagic, sizeof(kMagic));
+  put(os, kVersion);
+  put(os, map.lidarMap().config().voxel_size_m);
+  put(os, map.localVisual().config().voxel_size_m);
+  map.save(os);
+  return infoOf(map, 0);
 }
 
 }  // namespace livo

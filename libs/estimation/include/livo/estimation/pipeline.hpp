@@ -77,14 +77,15 @@ class Pipeline {
   /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json
   /// map {local_voxels, visual_points_local, visual_points_longterm, bytes}.
   HybridMapStats mapStats() const { return map_->stats(); }
-  /// Images whose size does not match the camera calibration (skipped by the visual update).
+  /// Frame images whose size does not match the camera calibration (never used by the visual update).
   std::size_t imagesWrongSize() const { return images_wrong_size_; }
   const PipelineConfig& config() const { return cfg_; }
   std::size_t framesProcessed() const { return frames_; }
 
  private:
   FrameResult processFrame(const Frame& frame);
-  void visualStep(const Frame& frame, FrameResult& r);
+  /// Steps 5-6 on `gray`, the frame's image at the processing scale.
+  void visualStep(const Frame& frame, const Image& gray, FrameResult& r);
 
   PipelineConfig cfg_;
   Recombiner recombiner_;

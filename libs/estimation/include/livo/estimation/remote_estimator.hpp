@@ -79,7 +79,7 @@ class RemoteEstimator {
 
  private:
   bool query(MapQuery& q, Submap& out, RemoteFrameResult& r, MapClient& client);
-  void visualStep(const Frame& frame, RemoteFrameResult& r, MapClient& client, MapUpdate& update);
+  void visualStep(const Frame& frame, const Image& gray, RemoteFrameResult& r, MapClient& client, MapUpdate& update);
 
   PipelineConfig cfg_;
   LioOdometry lio_;

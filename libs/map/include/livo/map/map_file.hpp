@@ -12,6 +12,8 @@
 #include "livo/map/hybrid_map.hpp"
 
 #include <cstddef>
+#include <istream>
+#include <ostream>
 #include <string>
 
 namespace livo {
@@ -31,5 +33,8 @@ MapFileInfo saveMap(const std::string& path, const HybridMap& map);
 /// Replaces the map's content with the file's. Throws std::runtime_error naming the path and the
 /// problem (not a map file, version, voxel size mismatch, truncated, bad count); the map is then empty.
 MapFileInfo loadMap(const std::string& path, HybridMap& map);
+/// The same on streams (`name` stands for the file in errors; file_bytes stays 0).
+MapFileInfo saveMap(std::ostream& os, const HybridMap& map);
+MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map);
 
 }  // namespace livo

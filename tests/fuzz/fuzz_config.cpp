@@ -1,0 +1,6 @@
+// libFuzzer entry point of fuzz_targets.hpp: fuzzConfig.
+#include "fuzz_targets.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  return livo::fuzz::fuzzConfig(data, size);
+}
