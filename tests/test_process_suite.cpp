@@ -71,9 +71,10 @@ struct Suite {
   std::unique_ptr<Child> mapserver, estimator, preprocess, exporter;
   const Netns& ns;
   std::string rig, out;
-  Suite(const Netns& n, const std::string& rig_path, const std::string& out_dir) : ns(n), rig(rig_path), out(out_dir) {
+  Suite(const Netns& n, const std::string& rig_path, const std::string& out_dir, bool with_mapserver = true)
+      : ns(n), rig(rig_path), out(out_dir) {
     std::filesystem::create_directories(out);
-    startMapServer("mapserver.txt");
+    if (with_mapserver) startMapServer("mapserver.txt");
     estimator = std::make_unique<Child>(ns.exec({kBin + "/livo-estimator", "--config", rig, "--lcm-url", kUrl,
                                                  "--idle-exit", "6"}),
                                         out + "/estimator.txt");
@@ -98,7 +99,7 @@ struct Suite {
   void finish() {
     EXPECT_EQ(preprocess->wait(120), 0) << readFile(out + "/preprocess.txt");
     EXPECT_EQ(estimator->wait(120), 0) << readFile(out + "/estimator.txt");
-    EXPECT_EQ(exporter->wait(120), 0) << readFile(out + "/exporter.txt");
+    if (exporter) EXPECT_EQ(exporter->wait(120), 0) << readFile(out + "/exporter.txt");
     mapserver->signal(SIGINT);
     EXPECT_EQ(mapserver->wait(60), 0);
   }
@@ -158,6 +159,39 @@ TEST(SuiteNetns, MapServerKilledAndRestartedEstimatorRecovers) {
   const double e = ate(readTum(d.gt), split);
   std::cout << "demo with the map server killed for ~1 s: ATE " << e * 100 << " cm (" << split.size() << " poses)\n";
   EXPECT_LE(e, 0.15) << "the estimator recovers on the rebuilt map";
+}
+
+TEST(SuiteNetns, EstimatorStartedBeforeTheMapServerAndExporterKilled) {
+  Netns ns;
+  if (!ns.ok) GTEST_SKIP() << ns.why;
+  if (!test::haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  const DemoLog& d = demoLog();
+  ASSERT_TRUE(d.ok) << d.error;
+  Suite suite(ns, d.rig, d.dir + "/late", /*with_mapserver=*/false);
+  auto player = suite.play(d.log);
+  sleepS(3.0);  // the estimator runs on its own meanwhile
+  suite.startMapServer("mapserver.txt");
+  sleepS(6.0);
+  suite.exporter->signal(SIGKILL);  // no chance to flush anything at exit
+  suite.exporter->wait(10);
+  const std::size_t lines_at_kill = test::countLines(suite.out + "/export/trajectory.tum");
+  suite.exporter.reset();
+  EXPECT_EQ(player->wait(120), 0);
+  suite.finish();
+
+  const std::string est_log = readFile(suite.out + "/estimator.txt");
+  EXPECT_NE(est_log.find("no submap for request"), std::string::npos) << est_log;
+  EXPECT_NE(est_log.find("the map server answers again"), std::string::npos) << est_log;
+  // The killed exporter's trajectory: every line written so far is complete and readable.
+  Trajectory kept;
+  ASSERT_NO_THROW(kept = readTum(suite.out + "/export/trajectory.tum"));
+  std::cout << "exporter killed after " << kept.size() << " poses (" << lines_at_kill << " lines at the kill)\n";
+  EXPECT_GE(kept.size() + 1, lines_at_kill - 1) << "at most the pose being written is lost";
+  EXPECT_GT(kept.size(), 50u) << "about 9 s of 10 Hz poses were exported before the kill";
+  const double e = ate(readTum(d.gt), kept);
+  std::cout << "estimator alone for 3 s, then with the map server: ATE " << e * 100 << " cm over " << kept.size()
+            << " poses\n";
+  EXPECT_LE(e, 0.5) << "IMU-only for 3 s, then LiDAR-inertial on the new map";
 }
 
 TEST(SuiteBinaries, HelpAndErrorsNameTheProblem) {
