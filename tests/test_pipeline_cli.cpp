@@ -1,30 +1,21 @@
 // livo-run as users run it: livo-sim writes a short demo log and its rig, livo-run processes it in each
 // visual mode, and the output directory holds every file of the contract with the documented fields.
 // livo-test-bins: livo-sim livo-run livo-eval
+#include "pipeline_cli_test_util.hpp"
+
 #include <gtest/gtest.h>
 
-#include <cstdlib>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
-
-namespace {
-
-std::string bin(const std::string& name) { return std::string(LIVO_BINARY_DIR) + "/bin/" + name; }
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-int run(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
-
-}  // namespace
+using livo::test::bin;
+using livo::test::run;
+using livo::test::slurp;
 
 TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
   for (const char* b : {"livo-sim", "livo-run", "livo-eval"})
@@ -45,7 +36,11 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
       EXPECT_TRUE(fs::exists(out / f)) << f;
     const std::string csv = slurp(out / "frames.csv");
     EXPECT_EQ(csv.substr(0, csv.find('\n')),
-              "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points");
+              "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
+              "map_bytes");
+    const std::vector<double> map_bytes = livo::test::csvColumn(out / "frames.csv", "map_bytes");
+    ASSERT_FALSE(map_bytes.empty());
+    EXPECT_GT(map_bytes.back(), 0.0);  // the map's bytes after the last frame
     const std::string stats = slurp(out / "stats.json");
     for (const char* key : {"\"frames\"", "\"visual_frames\"", "\"degenerate_frames\"", "\"timing_ms\"", "\"lio\"",
                             "\"vio\"", "\"map\"", "\"total\"", "\"median\"", "\"p95\"", "\"peak_rss_mb\"",

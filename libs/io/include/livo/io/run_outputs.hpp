@@ -1,7 +1,8 @@
 // The output directory of a run (livo-run --out DIR, livo-exporter --out DIR):
 //   trajectory.tum  IMU pose in the world frame per frame (flushed per line)
 //   frames.csv      one row per frame: t, lio_ms, vio_ms, total_ms, sigma_min, degenerate, visual_used,
-//                   n_points, n_planes_matched, n_visual_points (flushed per row)
+//                   n_points, n_planes_matched, n_visual_points, map_bytes (flushed per row; map_bytes:
+//                   the map's accounted bytes after the frame, 0 when unknown, e.g. livo-exporter)
 //   stats.json      frames, visual_frames, degenerate_frames, timing_ms {lio, vio, map, total} x
 //                   {mean, median, p95, max}, peak_rss_mb, map {local_voxels, visual_points_local,
 //                   visual_points_longterm, bytes}, plus run-specific counters
@@ -32,6 +33,10 @@ struct FrameRecord {
   int n_points = 0;
   int n_planes_matched = 0;
   int n_visual_points = 0;
+  /// Accounted bytes of every map structure after this frame; 0 = unknown (livo-exporter) or not
+  /// initialised. livo-run: the map's O(1) estimate with a memory cap, else an exact count every few
+  /// frames carried forward (processes/livo-run/main.cpp).
+  std::uint64_t map_bytes = 0;
 };
 
 /// Map size at the end of a run.

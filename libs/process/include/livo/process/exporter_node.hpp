@@ -2,7 +2,8 @@
 // with the same files as livo-run (RunOutputs):
 //   LIVO_ODOMETRY + LIVO_ESTIMATOR_STATS of one frame (same utime) -> a trajectory.tum line and a
 //       frames.csv row, written and flushed as soon as both arrived (or when a later frame completes,
-//       or on finish, with what arrived), so a killed exporter loses at most the frames in flight;
+//       or on finish, with what arrived), so a killed exporter loses at most the frames in flight
+//       (its map_bytes column stays 0: no per-frame map size reaches the exporter);
 //   LIVO_REGISTERED_SCAN -> map.pcd (voxel grid, colour where a camera saw the point) and map.bt
 //       (rays from the frame's odometry position), written by finish();
 //   LIVO_MAP_STATS -> the newest one is the `map` section of stats.json, written by finish().
