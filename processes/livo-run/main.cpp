@@ -33,14 +33,16 @@ struct Args {
   std::string visual_mode = "adaptive";
   std::string map_mode = "hybrid";
   bool quiet = false;
+  bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)
   long max_frames = -1;
 };
 
 void usage(std::ostream& os) {
   os << "usage: livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off]\n"
-        "                [--map-mode hybrid|global] [--max-frames N] [--quiet]\n"
+        "                [--map-mode hybrid|global] [--max-frames N] [--no-maps] [--quiet]\n"
         "Runs the odometry on an LCM log in one process and writes trajectory.tum, frames.csv and\n"
-        "stats.json into DIR.\n";
+        "stats.json into DIR, and map.pcd / map.bt unless --no-maps (their point store and ray casting\n"
+        "cost time and memory of their own: benchmarks of the odometry use --no-maps).\n";
 }
 
 bool parseArgs(int argc, char** argv, Args& a) {
@@ -58,6 +60,7 @@ bool parseArgs(int argc, char** argv, Args& a) {
     else if (s == "--visual-mode") value(a.visual_mode);
     else if (s == "--map-mode") value(a.map_mode);
     else if (s == "--quiet") a.quiet = true;
+    else if (s == "--no-maps") a.no_maps = true;
     else if (s == "--max-frames") {
       std::string v;
       value(v);
@@ -152,7 +155,7 @@ int main(int argc, char** argv) {
     };
     const auto onFrame = [&](const Frame& frame, const FrameResult& r) {
       if (stop) return;
-      if (r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
+      if (!args.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
       FrameRecord rec;
       rec.utime = frame.utime;
       rec.has_pose = r.lio.initialized;
@@ -256,8 +259,10 @@ int main(int argc, char** argv) {
     ms.visual_points_local = hs.visual_points_local;
     ms.visual_points_longterm = hs.visual_points_longterm;
     ms.bytes = hs.bytes;
-    cloud.writePcd(args.out + "/map.pcd");
-    if (export_cfg.octomap_enabled) occupancy.writeBt(args.out + "/map.bt");
+    if (!args.no_maps) {
+      cloud.writePcd(args.out + "/map.pcd");
+      if (export_cfg.octomap_enabled) occupancy.writeBt(args.out + "/map.bt");
+    }
     counters["map_pcd_points"] = double(cloud.size());
     const HybridMapCounters& mc = hs.counters;
     for (const auto& [k, v] : std::map<std::string, double>{
