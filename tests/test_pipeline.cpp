@@ -1,12 +1,13 @@
 // End-to-end on the simulator, in one process (the same Pipeline livo-run uses): short seeded runs of
 // the shipped scenarios against the simulator's ground truth (LiDAR-inertial, and with the visual update
 // in the adaptive and all modes), plus undistortion with the true IMU.
-// livo-test-deps: livo_sim livo_estimation livo_eval livo_io
+// livo-test-deps: livo_sim livo_estimation livo_eval livo_io livo_process
 #include "livo/estimation/pipeline.hpp"
 #include "livo/estimation/undistort.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/eval/evaluate.hpp"
 #include "livo/io/channels.hpp"
+#include "livo/process/estimator_node.hpp"
 #include "livo/sim/simulator.hpp"
 
 #include <filesystem>
@@ -210,6 +211,7 @@ TEST(Pipeline, ShippedRigConfigsLoadCompletely) {
     EXPECT_NO_THROW({
       cfg.load(file.root());
       channels.load(file.root().section("channels"));
+      EstimatorNodeConfig{}.load(file.root().section("estimator"));  // livo-estimator's own section
       file.checkAllKeysUsed();
     });
     ++n;

@@ -3,6 +3,7 @@
 // sweeps, an IMU gap of 0.5 s, a scan jumping back in time and an image of the wrong size are counted
 // in stats.json while the run continues and stays accurate; a rig config without a calibration key is
 // refused naming the key.
+// livo-test-whole (the simulated log is shared by its tests)
 // livo-test-bins: livo-sim livo-run
 // livo-test-deps: livo_io livo_eval
 #include "livo/eval/evaluate.hpp"

@@ -2,6 +2,7 @@
 // livo-estimator and livo-mapserver) against the single-process Pipeline on the same frames, with
 // the simulator's ground truth: same trajectory within a small tolerance, lost answers survived,
 // map files that reload to the same answers.
+// livo-test-whole (the simulated log is shared by its tests)
 // livo-test-deps: livo_sim livo_estimation livo_eval livo_map
 #include "livo/estimation/remote_estimator.hpp"
 #include "livo/map/map_file.hpp"

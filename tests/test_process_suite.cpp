@@ -2,6 +2,7 @@
 // by lcm-logplayer inside a private network namespace (no traffic leaves its loopback device; skipped
 // when not root or without `ip netns`): the exported trajectory against livo-run on the same log and
 // against the simulator's ground truth, and a map server killed mid-run and restarted.
+// livo-test-whole (the simulated log is shared by its tests)
 // livo-test-bins: livo-sim livo-run livo-preprocess livo-estimator livo-mapserver livo-exporter
 // livo-test-deps: livo_eval
 #include "livo/eval/evaluate.hpp"
@@ -99,7 +100,9 @@ struct Suite {
   void finish() {
     EXPECT_EQ(preprocess->wait(120), 0) << readFile(out + "/preprocess.txt");
     EXPECT_EQ(estimator->wait(120), 0) << readFile(out + "/estimator.txt");
-    if (exporter) EXPECT_EQ(exporter->wait(120), 0) << readFile(out + "/exporter.txt");
+    if (exporter) {
+      EXPECT_EQ(exporter->wait(120), 0) << readFile(out + "/exporter.txt");
+    }
     mapserver->signal(SIGINT);
     EXPECT_EQ(mapserver->wait(60), 0);
   }

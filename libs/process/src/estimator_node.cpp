@@ -71,6 +71,7 @@ bool EstimatorNode::request(const MapQuery& q, Submap& out) {
     if (left <= 0) break;
     lcm_.handleOnce(std::max(1, int(left)));
   }
+  if (!answered_) lcm_.drain();  // an answer that arrived while the deadline passed still counts
   waiting_for_ = -1;
   if (!answered_) {
     ++counters_.timeouts;
