@@ -68,8 +68,6 @@ void PlaneIndex::add(const VoxelKey& key, const Plane& plane) {
 }
 
 void PlaneIndex::clear() {
-  // Keep the vectors' capacity: the index is refilled every frame.
-  for (auto& kv : voxels_) kv.second.clear();
   voxels_.clear();
   planes_ = 0;
 }

@@ -33,10 +33,11 @@ class VisualMapOps {
                         const std::vector<bool>& occupied_cells) = 0;
 };
 
-/// VisualMapOps on a HybridMap (both visual maps, refinement against its LiDAR map).
-class HybridVisualOps : public VisualMapOps {
+/// Forwards every VisualMapOps call except refine() to a map with VisualMap's per-frame operations.
+template <class Map>
+class VisualOpsOn : public VisualMapOps {
  public:
-  explicit HybridVisualOps(HybridMap& map) : map_(map) {}
+  explicit VisualOpsOn(Map& map) : map_(map) {}
   std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T, const std::vector<Vec3>& scan) override {
     return map_.pointsInView(cam, T, scan);
   }
@@ -46,39 +47,30 @@ class HybridVisualOps : public VisualMapOps {
   bool addObservation(VisualPoint& p, const Image& g, const Pose& T, const Vec2& px, float tau, Utime t) override {
     return map_.addObservation(p, g, T, px, tau, t);
   }
-  void refine(VisualPoint& p) override { map_.refine(p); }
   std::size_t removeBadPoints() override { return map_.removeBadPoints(); }
   int addPoints(const Image& g, const CameraModel& cam, const Pose& T, float tau, Utime t,
                 const std::vector<NewPointCandidate>& c, const std::vector<bool>& occ) override {
     return map_.addPoints(g, cam, T, tau, t, c, occ);
   }
 
- private:
-  HybridMap& map_;
+ protected:
+  Map& map_;
 };
 
-/// VisualMapOps on one VisualMap, refining normals against `planes` (may be null).
-class SingleVisualOps : public VisualMapOps {
+/// On a HybridMap: both visual maps, refinement against its LiDAR map.
+class HybridVisualOps final : public VisualOpsOn<HybridMap> {
  public:
-  SingleVisualOps(VisualMap& map, const PlaneFinder* planes) : map_(map), planes_(planes) {}
-  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T, const std::vector<Vec3>& scan) override {
-    return map_.pointsInView(cam, T, scan);
-  }
-  const std::vector<bool>& occupiedCells() const override { return map_.occupiedCells(); }
-  ImageGrid gridFor(const CameraModel& cam) const override { return map_.gridFor(cam); }
-  void reportPhotometricError(VisualPoint& p, double e, double gate) override { map_.reportPhotometricError(p, e, gate); }
-  bool addObservation(VisualPoint& p, const Image& g, const Pose& T, const Vec2& px, float tau, Utime t) override {
-    return map_.addObservation(p, g, T, px, tau, t);
-  }
+  using VisualOpsOn::VisualOpsOn;
+  void refine(VisualPoint& p) override { map_.refine(p); }
+};
+
+/// On one VisualMap, refining normals against `planes` (may be null).
+class SingleVisualOps final : public VisualOpsOn<VisualMap> {
+ public:
+  SingleVisualOps(VisualMap& map, const PlaneFinder* planes) : VisualOpsOn(map), planes_(planes) {}
   void refine(VisualPoint& p) override { map_.refine(p, planes_); }
-  std::size_t removeBadPoints() override { return map_.removeBadPoints(); }
-  int addPoints(const Image& g, const CameraModel& cam, const Pose& T, float tau, Utime t,
-                const std::vector<NewPointCandidate>& c, const std::vector<bool>& occ) override {
-    return map_.addPoints(g, cam, T, tau, t, c, occ);
-  }
 
  private:
-  VisualMap& map_;
   const PlaneFinder* planes_;
 };
 
