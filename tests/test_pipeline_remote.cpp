@@ -1,10 +1,11 @@
-// The estimator with its map in another process (RemoteEstimator + MapService, the cores of
+// The estimator with its map in another process (FramePipeline + RemoteMap + MapService, the cores of
 // livo-estimator and livo-mapserver) against the single-process Pipeline on the same frames, with
 // the simulator's ground truth: same trajectory within a small tolerance, lost answers survived,
 // map files that reload to the same answers.
 // livo-test-whole (the simulated log is shared by its tests)
 // livo-test-deps: livo_sim livo_estimation livo_eval livo_map
-#include "livo/estimation/remote_estimator.hpp"
+#include "livo/estimation/frame_pipeline.hpp"
+#include "livo/estimation/remote_map.hpp"
 #include "livo/map/map_file.hpp"
 #include "livo/map/map_service.hpp"
 #include "remote_test_util.hpp"
@@ -52,16 +53,17 @@ struct RemoteRun {
 };
 
 RemoteRun runRemote(const SimFrames& sf, DirectClient& client) {
-  RemoteEstimator est(sf.cfg);
+  FramePipeline est(sf.cfg);
+  RemoteMap map(sf.cfg, client);
   RemoteRun out;
   for (const Frame& f : sf.frames) {
-    const RemoteFrameResult r = est.process(f, client);
-    out.predicted += r.queries > 0;
-    if (!r.frame.lio.initialized) continue;
-    out.est.push_back({toSeconds(f.utime), r.frame.lio.state.pose()});
-    out.visual_frames += r.frame.visual_used;
-    out.timeouts += std::size_t(r.timeouts);
-    out.timeout_frames += r.map_timeout;
+    const FrameResult r = est.process(f, map);
+    out.predicted += r.link.queries > 0;
+    if (!r.lio.initialized) continue;
+    out.est.push_back({toSeconds(f.utime), r.lio.state.pose()});
+    out.visual_frames += r.visual_used;
+    out.timeouts += std::size_t(r.link.timeouts);
+    out.timeout_frames += r.link.map_timeout;
   }
   return out;
 }

@@ -5,7 +5,6 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/sensors/downsample.hpp"
 
-#include <stdexcept>
 
 namespace livo {
 
@@ -21,23 +20,7 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   root.section("lio").get("min_matches", min_matches);
 }
 
-namespace {
-HybridMapConfig globalMapConfig() {
-  HybridMapConfig c;
-  c.mode = MapMode::Global;
-  return c;
-}
-}  // namespace
-
-LioOdometry::LioOdometry(LioOdometryConfig cfg)
-    : cfg_(std::move(cfg)),
-      init_(cfg_.imu),
-      own_map_(std::make_unique<HybridMap>(globalMapConfig(), cfg_.map, VisualMapConfig{})),
-      map_(own_map_.get()) {}
-
-LioOdometry::LioOdometry(LioOdometryConfig cfg, HybridMap& map) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(&map) {}
-
-LioOdometry::LioOdometry(LioOdometryConfig cfg, RemoteMapTag) : cfg_(std::move(cfg)), init_(cfg_.imu), map_(nullptr) {}
+LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {}
 
 std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
                                                   const std::vector<ImuTracePoint>& trace) const {
@@ -82,7 +65,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
   watch_.restart();
 
-  // 1. Static initialisation from the first IMU samples (gravity, gyro bias, g units).
+  // 1a. Static initialisation from the first IMU samples (gravity, gyro bias, g units).
   if (!init_.done()) {
     for (const auto& s : frame.imu) {
       if (s.utime <= last_imu_fed_) continue;
@@ -102,11 +85,11 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
     return false;
   }
 
-  // 2. Forward propagation to the frame time, keeping the per-sample trace.
+  // 1b. Forward propagation to the frame time, keeping the per-sample trace.
   std::vector<ImuTracePoint> trace;
   propagator_->propagate(x_, P_, frame.imu, frame.utime, &trace);
 
-  // 3. Undistort + downsample the sweep, with per-point covariances.
+  // 1c. Undistort + downsample the sweep, with per-point covariances.
   r.points = preparePoints(frame.sweep, trace);
   r.n_points = static_cast<int>(r.points.size());
   r.state = x_;  // the prediction until update()
@@ -115,7 +98,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
 }
 
 void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes) {
-  // 4. Iterated point-to-plane update against the map (skipped until the map has content).
+  // 3. Iterated point-to-plane update against the map (skipped until the map has content).
   if (map_started_ && !r.points.empty()) {
     NavState x = x_;
     StateCov P = P_;
@@ -141,22 +124,6 @@ void LioOdometry::markInserted(LioFrameResult& r) {
   if (r.points.empty()) return;
   r.map_started = !map_started_;
   map_started_ = true;
-}
-
-LioFrameResult LioOdometry::process(const Frame& frame) {
-  LioFrameResult r;
-  if (!predict(frame, r)) return r;
-  if (map_ == nullptr) throw std::logic_error("LioOdometry::process: no map (remote mode: use predict/update)");
-  update(r, map_->lidarMap());
-  // 5. Map insertion with the posterior pose. As in the reference, the map grows every frame (a failed
-  // update keeps the IMU prediction).
-  Stopwatch map_watch;
-  if (!r.points.empty()) {
-    map_->insertLidar(worldPoints(r.points));
-    markInserted(r);
-  }
-  r.map_ms = map_watch.elapsedMs();
-  return r;
 }
 
 }  // namespace livo

@@ -1,26 +1,8 @@
 #include "livo/estimation/visual_step.hpp"
 
-#include <opencv2/imgproc.hpp>
-
 #include <cmath>
 
 namespace livo {
-
-const Image* processingImage(const Image& frame_image, const CameraConfig& cfg, const CameraModel& cam, Image& scratch) {
-  if (frame_image.width == cam.width() && frame_image.height == cam.height()) return &frame_image;
-  if (std::abs(cfg.scale - 1.0) < 1e-12 || frame_image.width != cfg.width || frame_image.height != cfg.height)
-    return nullptr;
-  const cv::Mat src(frame_image.height, frame_image.width, CV_8UC1, const_cast<std::uint8_t*>(frame_image.data.data()),
-                    static_cast<std::size_t>(frame_image.row_stride));
-  cv::Mat dst;
-  cv::resize(src, dst, cv::Size(cam.width(), cam.height()), 0, 0, cv::INTER_AREA);
-  scratch.utime = frame_image.utime;
-  scratch.width = dst.cols;
-  scratch.height = dst.rows;
-  scratch.row_stride = dst.cols;
-  scratch.data.assign(dst.datastart, dst.dataend);
-  return &scratch;
-}
 
 std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& points) {
   std::vector<Vec3> out;

@@ -25,7 +25,7 @@ void EstimatorNodeConfig::load(const ConfigNode& s) {
 
 EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNodeConfig cfg,
                              const ChannelConfig& channels, std::ostream* log)
-    : lcm_(lcm), cfg_(cfg), channels_(channels), log_(log), estimator_(std::move(pipeline)) {
+    : lcm_(lcm), cfg_(cfg), channels_(channels), log_(log), pipeline_(pipeline), map_(pipeline, *this) {
   lcm_.subscribe<livo::frame_t>(channels_.frame, [this](const livo::frame_t& m) {
     std::pair<Frame, std::size_t> item;
     Validation v = fromMsg(m, item.first, lcm_.limits(), &item.second);
@@ -113,8 +113,7 @@ std::size_t EstimatorNode::poll() {
 
 void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   counters_.nonfinite_points += nonfinite;
-  const RemoteFrameResult r = estimator_.process(frame, *this);
-  const FrameResult& f = r.frame;
+  const FrameResult f = pipeline_.process(frame, map_);
   ++counters_.frames;
   counters_.last_utime = frame.utime;
 
@@ -123,12 +122,12 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   st.frame_index = std::int64_t(counters_.frames - 1);
   st.lio_ms = float(f.lio.lio_ms);
   st.vio_ms = float(f.vio_ms);
-  st.map_ms = float(r.wait_ms);
+  st.map_ms = float(f.link.wait_ms);
   st.total_ms = float(f.total_ms);
   st.sigma_min = float(std::max(0.0, f.lio.sigma_min));
   st.degenerate = f.degenerate;
   st.visual_used = f.visual_used;
-  st.map_timeout = r.map_timeout;
+  st.map_timeout = f.link.map_timeout;
   st.n_points = f.lio.n_points;
   st.n_planes_matched = f.lio.n_matched;
   st.n_visual_points = f.n_visual_points;
@@ -144,14 +143,14 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   o.status = 0;
   if (f.degenerate) o.status |= odometry_status::kDegenerate;
   if (f.visual_used) o.status |= odometry_status::kVisualUpdate;
-  if (r.map_timeout) o.status |= odometry_status::kMapTimeout;
-  if (f.lio.n_points > 0 && !f.lio.lio_ok && !f.lio.map_started) o.status |= odometry_status::kLidarFailed;
+  if (f.link.map_timeout) o.status |= odometry_status::kMapTimeout;
+  if (f.lidarFailed()) o.status |= odometry_status::kLidarFailed;
   lcm_.publish(channels_.odometry, toMsg(o));
   ++counters_.odometry_published;
 
   if (!f.lio.points.empty()) {
-    const CameraModel* cam = estimator_.camera();
-    const PipelineConfig& pc = estimator_.config();
+    const CameraModel* cam = pipeline_.camera();
+    const PipelineConfig& pc = pipeline_.config();
     const RegisteredScan scan = colourScan(frame.utime, f.lio.state.pose(), f.lio.points, cam,
                                            frame.has_image ? &frame.image : nullptr, pc.camera.T_imu_camera,
                                            pc.camera.scale);
@@ -181,8 +180,8 @@ std::string EstimatorNode::summary() const {
   os << "bytes per message: query " << double(counters_.query_bytes) / std::max<double>(1.0, double(counters_.queries))
      << ", submap " << double(counters_.submap_bytes) / answered << ", update "
      << double(counters_.update_bytes) / std::max<double>(1.0, double(counters_.frames)) << "\n";
-  os << "voxel size mismatches " << estimator_.voxelSizeMismatches() << ", images of the wrong size "
-     << estimator_.imagesWrongSize() << ", non-finite points " << counters_.nonfinite_points << "\n";
+  os << "voxel size mismatches " << map_.voxelSizeMismatches() << ", images of the wrong size "
+     << pipeline_.imagesWrongSize() << ", non-finite points " << counters_.nonfinite_points << "\n";
   os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();

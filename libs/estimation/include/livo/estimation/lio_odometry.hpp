@@ -1,16 +1,16 @@
-// The LiDAR-inertial part of the per-frame pipeline: initialise, propagate, undistort, downsample,
-// iterated point-to-plane update, degeneracy metric, map insertion.
+// The LiDAR-inertial part of the per-frame pipeline (frame_pipeline.hpp): initialise, propagate,
+// undistort, downsample, iterated point-to-plane update, degeneracy metric, the registered points.
 #pragma once
 
 #include "livo/common/config.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
-#include "livo/map/hybrid_map.hpp"
-#include "livo/map/voxel_map.hpp"
+#include "livo/map/plane_finder.hpp"
+#include "livo/map/point_cov.hpp"
+#include "livo/map/voxel_map_config.hpp"
 
 #include <memory>
-#include <stdexcept>
 #include <string>
 
 namespace livo {
@@ -50,31 +50,19 @@ struct LioFrameResult {
 
 class LioOdometry {
  public:
-  /// Standalone: owns an unbounded LiDAR map (a global-mode HybridMap built from cfg.map).
+  /// The map is not held here: the per-frame pipeline (frame_pipeline.hpp) hands update() the planes
+  /// to match and inserts worldPoints() into the map itself (map_access.hpp).
   explicit LioOdometry(LioOdometryConfig cfg);
-  /// Inserts into and matches against `map`'s LiDAR map (not owned; must outlive this object; cfg.map
-  /// is not used, the map has its own configuration). Sliding and the memory cap are the map owner's
-  /// business (HybridMap::update, e.g. by Pipeline).
-  LioOdometry(LioOdometryConfig cfg, HybridMap& map);
-  /// Without a map: the map lives elsewhere (the map server). Only the phases below may be used;
-  /// process() and map() throw std::logic_error.
-  struct RemoteMapTag {};
-  LioOdometry(LioOdometryConfig cfg, RemoteMapTag);
 
-  /// Processes one frame in time order: predict(), update() against the map's LiDAR map, insertion of
-  /// worldPoints() into it. Frames before the IMU is initialised only feed it.
-  LioFrameResult process(const Frame& frame);
-
-  // The phases of process(), for an estimator whose map is remote (steps 1-3, then 4, then 5 by the
-  // map's owner):
-  /// Steps 1-3: initialisation, propagation to the frame time, undistortion and downsampling. Returns
+  // The LiDAR-inertial phases of a frame, in this order:
+  /// Step 1: initialisation, propagation to the frame time, undistortion and downsampling. Returns
   /// true when r.points wait for update() (r.state holds the prediction); false when there is
   /// nothing to estimate (IMU not initialised yet, frame inside the initialisation window).
   bool predict(const Frame& frame, LioFrameResult& r);
-  /// Step 4: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
+  /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
   /// r.P, r.lio_ms (since predict()) and the match results.
   void update(LioFrameResult& r, const PlaneFinder& planes);
-  /// World points with covariance at the current posterior (what step 5 inserts).
+  /// World points with covariance at the current posterior (what step 3 inserts into the map).
   std::vector<PointWithCov> worldPoints(const std::vector<BodyPoint>& pts) const;
   /// Records that the frame's points went into the map (enables update() from the next frame on).
   void markInserted(LioFrameResult& r);
@@ -85,11 +73,6 @@ class LioOdometry {
     P_ = P;
   }
   const LioOdometryConfig& config() const { return cfg_; }
-  /// The LiDAR voxel map (the local map in hybrid mode).
-  const VoxelMap& map() const {
-    if (map_ == nullptr) throw std::logic_error("LioOdometry::map: the map is remote");
-    return map_->lidarMap();
-  }
   const NavState& state() const { return x_; }
   const StateCov& covariance() const { return P_; }
   bool initialized() const { return init_.done(); }
@@ -101,8 +84,6 @@ class LioOdometry {
   LioOdometryConfig cfg_;
   ImuInitializer init_;
   std::unique_ptr<ImuPropagator> propagator_;
-  std::unique_ptr<HybridMap> own_map_;  ///< standalone only
-  HybridMap* map_;                      ///< own_map_, the external map or null (remote)
   NavState x_;
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;

@@ -1,6 +1,7 @@
-// Steps 5-6 of the per-frame pipeline (photometric update, visual map update), written once for the
-// two places a visual map can be: the in-process hybrid map (Pipeline, livo-run) and the estimator's
-// per-frame copy of the visual points the map server sent (RemoteEstimator, livo-estimator).
+// Step 6 of the per-frame pipeline (frame_pipeline.hpp: photometric update, visual map update),
+// written once for the two places a visual map can be: the in-process hybrid map (InProcessMap,
+// livo-run) and the estimator's per-frame copy of the visual points the map server sent (RemoteMap,
+// livo-estimator).
 #pragma once
 
 #include "livo/estimation/lio_odometry.hpp"
@@ -74,11 +75,6 @@ class SingleVisualOps final : public VisualOpsOn<VisualMap> {
   const PlaneFinder* planes_;
 };
 
-/// The frame's image at the processing scale of `cam`: `frame_image` itself when it already has the
-/// model's size, else a resized copy in `scratch` when it has the calibrated size and a scale is set.
-/// Null when the image is not the calibrated camera's (wrong size: never read it with this model).
-const Image* processingImage(const Image& frame_image, const CameraConfig& cfg, const CameraModel& cam, Image& scratch);
-
 /// World points of the frame's body points at state `x`.
 std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& points);
 
@@ -89,7 +85,7 @@ struct VisualStepResult {
   std::size_t removed_bad = 0;
 };
 
-/// Steps 5-6 at the LiDAR posterior (x, P): retrieval of the points in view of the scan, the
+/// Step 6 at the LiDAR posterior (x, P): retrieval of the points in view of the scan, the
 /// photometric update (x, P become its posterior when a point was used), then at the posterior the
 /// photometric error bookkeeping, new observations + refinement, removal of bad points and new
 /// points from the plane-matched LiDAR points in free cells.

@@ -1,6 +1,7 @@
 // Core of livo-estimator: LIVO_FRAME in; per frame LIVO_MAP_QUERY out and LIVO_SUBMAP back (request
 // ids, a timeout), then LIVO_MAP_UPDATE, LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and LIVO_ESTIMATOR_STATS
-// out (RemoteEstimator, livo/estimation/remote_estimator.hpp, does the estimation).
+// out (FramePipeline, livo/estimation/frame_pipeline.hpp, does the estimation; RemoteMap reaches the
+// map server through this node's MapClient).
 //
 // Frames are queued by the LCM handler and processed by poll() outside any handler; while a frame
 // waits for its submap, poll() handles LCM messages (frames keep being queued; other answers are
@@ -11,7 +12,8 @@
 #pragma once
 
 #include "livo/common/config.hpp"
-#include "livo/estimation/remote_estimator.hpp"
+#include "livo/estimation/frame_pipeline.hpp"
+#include "livo/estimation/remote_map.hpp"
 #include "livo/io/channels.hpp"
 #include "livo/process/lcm_node.hpp"
 
@@ -53,7 +55,8 @@ class EstimatorNode : public MapClient {
     Utime last_utime = 0;
   };
   const Counters& counters() const { return counters_; }
-  const RemoteEstimator& estimator() const { return estimator_; }
+  const FramePipeline& pipeline() const { return pipeline_; }
+  const RemoteMap& map() const { return map_; }
   std::string progressLine() const;
   std::string summary() const;
 
@@ -64,7 +67,8 @@ class EstimatorNode : public MapClient {
   EstimatorNodeConfig cfg_;
   ChannelConfig channels_;
   std::ostream* log_;
-  RemoteEstimator estimator_;
+  FramePipeline pipeline_;
+  RemoteMap map_;  ///< the map server, through request() / send()
   std::deque<std::pair<Frame, std::size_t>> queue_;
   bool in_poll_ = false;
   // Pending request.

@@ -1,0 +1,61 @@
+// The per-frame pipeline, written once for every place the map can be (map_access.hpp): livo-run and
+// the tests with the map in process (InProcessMap), livo-estimator with the map server (RemoteMap).
+//
+// Per recombined frame (sweep recut at the image time + the IMU samples covering it + the image):
+//   1. initialise from the IMU, propagate to the frame time, undistort and downsample the sweep;
+//   2. the planes around the predicted scan (map access);
+//   3. the iterated point-to-plane LiDAR update; the registered points go into the map;
+//   4. degeneracy of the matched plane normals (sigma_min, several frames in a row);
+//   5. frame selection (adaptive: keyframes unless degenerate; all; off);
+//   6. on a selected image: the photometric update and the visual map's changes;
+//   7. the frame's end at its final state (map maintenance, or the update message to the map server).
+// Every decision of the frame (the image check, the degeneracy rule, the selector, when the visual
+// step runs) is taken here and nowhere else.
+#pragma once
+
+#include "livo/estimation/frame_result.hpp"
+#include "livo/estimation/frame_selector.hpp"
+#include "livo/estimation/lio_odometry.hpp"
+#include "livo/estimation/map_access.hpp"
+#include "livo/estimation/pipeline_config.hpp"
+#include "livo/sensors/camera_model.hpp"
+
+#include <cstddef>
+#include <memory>
+
+namespace livo {
+
+class FramePipeline {
+ public:
+  /// Throws std::invalid_argument naming a bad visual_mode.
+  explicit FramePipeline(PipelineConfig cfg);
+
+  /// Runs steps 1-7 on one frame (time order) against `map`.
+  FrameResult process(const Frame& frame, MapAccess& map);
+
+  const PipelineConfig& config() const { return cfg_; }
+  /// The camera model at the processing scale (null without a camera).
+  const CameraModel* camera() const { return camera_.get(); }
+  const LioOdometry& odometry() const { return lio_; }
+  std::size_t framesProcessed() const { return frames_; }
+  /// Frame images whose size does not match the camera calibration (never used by the visual update).
+  std::size_t imagesWrongSize() const { return images_wrong_size_; }
+
+ private:
+  /// The frame's image at the processing scale in `scratch` or the frame itself; null without a
+  /// camera or an image, or when the image is not the calibrated camera's (counted).
+  const Image* frameImage(const Frame& frame, Image& scratch, FrameResult& r);
+  /// Step 3: LiDAR update against `planes`, then the registered points into the map.
+  void lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r);
+  /// Step 6 on `gray`, the frame's image at the processing scale.
+  void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r);
+
+  PipelineConfig cfg_;
+  LioOdometry lio_;
+  FrameSelector selector_;
+  std::unique_ptr<CameraModel> camera_;  ///< null without a camera
+  std::size_t images_wrong_size_ = 0;
+  std::size_t frames_ = 0;
+};
+
+}  // namespace livo

@@ -1,0 +1,44 @@
+// What one frame of the per-frame pipeline (frame_pipeline.hpp) produced.
+#pragma once
+
+#include "livo/estimation/lio_odometry.hpp"
+#include "livo/map/hybrid_map.hpp"
+
+#include <cstddef>
+
+namespace livo {
+
+/// What reaching the map cost this frame. Zeros for the in-process map; for the map server the
+/// queries, their answers and the update message (RemoteMap).
+struct MapLinkReport {
+  bool map_timeout = false;      ///< a query of this frame got no answer
+  int queries = 0;               ///< sent this frame (0, 1 or 2)
+  int timeouts = 0;
+  std::size_t query_keys = 0;    ///< root voxel keys of the LiDAR query
+  std::size_t submap_planes = 0;
+  std::size_t visual_keys = 0;
+  std::size_t submap_visual_points = 0;
+  double wait_ms = 0.0;          ///< time spent waiting for answers (not in lio_ms / vio_ms)
+  std::size_t update_points = 0;
+  std::size_t update_visual_points = 0;  ///< created, changed or removed
+};
+
+struct FrameResult {
+  LioFrameResult lio;
+  double total_ms = 0.0;
+  bool degenerate = false;     ///< sigma_min below the threshold for degenerate_frames frames in a row
+  bool visual_used = false;
+  int n_visual_points = 0;     ///< visual points used by the update
+  int n_new_visual_points = 0; ///< created this frame
+  double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
+  double vio_ms = 0.0;
+  bool image_wrong_size = false;  ///< the frame's image is not the calibrated camera's (never used)
+  MapUpdateReport map;         ///< step 7 in process: slides, evictions, bytes (estimate unless recounted), ms
+  MapLinkReport link;          ///< steps 2, 6, 7 through the map server
+
+  /// The LiDAR update could not run although the frame had points and a map to match (fewer than
+  /// lio.min_matches matches): the frame carries the IMU prediction.
+  bool lidarFailed() const { return lio.initialized && lio.n_points > 0 && !lio.lio_ok && !lio.map_started; }
+};
+
+}  // namespace livo

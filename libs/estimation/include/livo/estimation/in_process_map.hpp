@@ -1,0 +1,28 @@
+// The map access of the single process (livo-run, the tests): the HybridMap itself.
+//   step 2: its local LiDAR plane map; step 3b: insertion (the tile index for slides included);
+//   step 6: both visual maps (local and long-term), normals refined against the LiDAR map, which
+//   already holds this frame's scan; step 7: HybridMap::update at the frame's final position
+//   (slides when due, their work spread over frames, and the memory cap).
+#pragma once
+
+#include "livo/estimation/map_access.hpp"
+#include "livo/map/hybrid_map.hpp"
+
+namespace livo {
+
+class InProcessMap final : public MapAccess {
+ public:
+  /// `map` is not owned and must outlive this object.
+  explicit InProcessMap(HybridMap& map) : map_(map), visual_(map) {}
+
+  const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidarMap(); }
+  void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.insertLidar(points); }
+  VisualMapOps* visualMap(const Frame&, FrameResult&) override { return &visual_; }
+  void finishFrame(const Frame&, FrameResult& r) override { r.map = map_.update(r.lio.state.p_world_imu); }
+
+ private:
+  HybridMap& map_;
+  HybridVisualOps visual_;
+};
+
+}  // namespace livo

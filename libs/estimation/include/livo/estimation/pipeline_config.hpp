@@ -1,0 +1,34 @@
+// Configuration of the per-frame pipeline: every rig section it uses (not channels).
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/estimation/lio_odometry.hpp"
+#include "livo/estimation/selector_config.hpp"
+#include "livo/estimation/vio_update.hpp"
+#include "livo/map/hybrid_map_config.hpp"
+#include "livo/map/visual_map_config.hpp"
+#include "livo/sensors/camera_config.hpp"
+#include "livo/sensors/preprocess_config.hpp"
+
+#include <string>
+
+namespace livo {
+
+struct PipelineConfig {
+  PreprocessConfig preprocess;
+  LioOdometryConfig lio;
+  CameraConfig camera;
+  SelectorConfig selector;
+  VioConfig vio;
+  VisualMapConfig visual_map;
+  HybridMapConfig map;  ///< section `map`; its mode comes from map_mode
+  std::string visual_mode = "adaptive";  ///< adaptive | all | off (command line)
+  std::string map_mode = "hybrid";       ///< hybrid | global (command line; overrides map.mode)
+
+  /// Reads every section a rig config may hold that the pipeline uses (not channels).
+  void load(const ConfigNode& root);
+  /// The map section with the mode of map_mode (throws std::invalid_argument naming a bad value).
+  HybridMapConfig mapConfig() const;
+};
+
+}  // namespace livo

@@ -1,0 +1,114 @@
+#include "livo/estimation/frame_pipeline.hpp"
+
+#include "livo/common/timing.hpp"
+#include "livo/estimation/visual_step.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace livo {
+
+void PipelineConfig::load(const ConfigNode& root) {
+  preprocess.load(root);
+  lio.load(root);
+  camera.load(root);
+  selector.load(root);
+  vio.load(root);
+  visual_map.load(root.section("vio"));
+  map.load(root.section("map"));
+}
+
+HybridMapConfig PipelineConfig::mapConfig() const {
+  HybridMapConfig c = map;
+  c.mode = parseMapMode(map_mode);  // throws naming the value
+  return c;
+}
+
+FramePipeline::FramePipeline(PipelineConfig cfg)
+    : cfg_(std::move(cfg)), lio_(cfg_.lio), selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)) {
+  if (cfg_.camera.enabled) camera_ = CameraModel::create(cfg_.camera);
+}
+
+FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
+  Stopwatch watch;
+  FrameResult r;
+  ++frames_;
+  Image scratch;
+  const Image* gray = frameImage(frame, scratch, r);
+  // 1. Initialisation, propagation, undistortion, downsampling (nothing to estimate before the IMU
+  // is initialised or inside its window).
+  if (lio_.predict(frame, r.lio)) {
+    // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
+    const PlaneFinder& planes = map.planesFor(frame, r);
+    lidarStep(map, planes, r);
+    // 4. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a row.
+    r.degenerate = selector_.degenerate(r.lio.n_matched > 0, r.lio.sigma_min);
+    // 5-6. Frame selection; on a selected image the photometric update and the visual map changes.
+    if (gray != nullptr && r.lio.lio_ok && selector_.select(r.lio.state, r.lio.sigma_min, r.degenerate))
+      visualStep(frame, *gray, map, r);
+  }
+  // 7. The frame's end at its final state: slides and the memory cap in process, the update message
+  // to the map server. Visual point pointers of this frame are not used beyond this point.
+  if (r.lio.initialized) map.finishFrame(frame, r);
+  r.total_ms = watch.elapsedMs();
+  return r;
+}
+
+const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, FrameResult& r) {
+  if (!camera_ || !frame.has_image) return nullptr;
+  const Image& img = frame.image;
+  if (img.width == camera_->width() && img.height == camera_->height()) return &img;
+  // The calibrated size with a processing scale: resized; any other size is not the calibrated
+  // camera's and is never read with this model (counted).
+  if (std::abs(cfg_.camera.scale - 1.0) < 1e-12 || img.width != cfg_.camera.width || img.height != cfg_.camera.height) {
+    ++images_wrong_size_;
+    r.image_wrong_size = true;
+    return nullptr;
+  }
+  const cv::Mat src(img.height, img.width, CV_8UC1, const_cast<std::uint8_t*>(img.data.data()),
+                    static_cast<std::size_t>(img.row_stride));
+  cv::Mat dst;
+  cv::resize(src, dst, cv::Size(camera_->width(), camera_->height()), 0, 0, cv::INTER_AREA);
+  scratch.utime = img.utime;
+  scratch.width = dst.cols;
+  scratch.height = dst.rows;
+  scratch.row_stride = dst.cols;
+  scratch.data.assign(dst.datastart, dst.dataend);
+  return &scratch;
+}
+
+void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {
+  lio_.update(r.lio, planes);
+  r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
+  // As in the reference, the map grows every frame (a failed update inserts at the IMU prediction).
+  if (r.lio.points.empty()) return;
+  Stopwatch map_watch;
+  map.insertScan(lio_.worldPoints(r.lio.points), r);
+  lio_.markInserted(r.lio);
+  r.lio.map_ms = map_watch.elapsedMs();
+}
+
+void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r) {
+  Stopwatch watch;
+  const double wait_before = r.link.wait_ms;
+  VisualMapOps* ops = map.visualMap(frame, r);
+  if (ops == nullptr) return;  // no visual update without the map's points
+  NavState x = r.lio.state;
+  StateCov P = r.lio.P;
+  const VisualStepResult vs =
+      runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, r.lio);
+  if (vs.update.points_used > 0) lio_.setState(x, P);
+  selector_.markUsed(x);
+  r.visual_used = true;
+  r.n_visual_points = vs.update.points_used;
+  r.n_new_visual_points = vs.n_new_points;
+  r.vio_rms_before = vs.update.rms_before;
+  r.vio_rms_after = vs.update.rms_after;
+  r.lio.state = x;  // the frame's output is the posterior after the visual update
+  r.lio.P = P;
+  r.vio_ms = std::max(0.0, watch.elapsedMs() - (r.link.wait_ms - wait_before));
+}
+
+}  // namespace livo
