@@ -74,7 +74,8 @@ TEST(LivoReport, PlotsAndSummaryOfARunWithAKnownError) {
   }
   std::ofstream(dir / "run" / "stats.json")
       << R"({"frames": 400, "visual_mode": "adaptive", "map_mode": "hybrid", "peak_rss_mb": 50.0,
-            "timing_ms": {"lio": {"mean": 6, "median": 6, "p95": 7, "max": 7}},
+            "timing_ms": {"lio": {"mean": 6, "median": 6, "p95": 7, "max": 7},
+                          "vio_per_visual_frame": {"mean": 20.5, "median": 20, "p95": 21, "max": 22}},
             "map": {"bytes": 1400000}})";
   const double oracle = evaluate(gt, est, EvalConfig{}).ate.translation_m.rmse;
 
@@ -95,6 +96,9 @@ TEST(LivoReport, PlotsAndSummaryOfARunWithAKnownError) {
   EXPECT_NE(md.find(want.str()), std::string::npos) << md << "\nexpected " << want.str();
   EXPECT_NE(md.find("400 (40 with a visual update, 40 degenerate)"), std::string::npos) << md;
   EXPECT_NE(md.find("![memory](memory.png)"), std::string::npos) << md;
+  EXPECT_NE(md.find("| vio ms per visual frame (mean / median / p95 / max) | 20.50 / 20.00 / 21.00 / 22.00 |"),
+            std::string::npos)
+      << md;
 
   // Bad input: a clear error naming the problem, exit code 2.
   EXPECT_EQ(run(kReport + " " + dir.string(), out, dir.string()), 2);

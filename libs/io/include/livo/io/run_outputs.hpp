@@ -3,9 +3,12 @@
 //   frames.csv      one row per frame: t, lio_ms, vio_ms, total_ms, sigma_min, degenerate, visual_used,
 //                   n_points, n_planes_matched, n_visual_points, map_bytes (flushed per row; map_bytes:
 //                   the map's accounted bytes after the frame, 0 when unknown, e.g. livo-exporter)
-//   stats.json      frames, visual_frames, degenerate_frames, timing_ms {lio, vio, map, total} x
-//                   {mean, median, p95, max}, peak_rss_mb, map {local_voxels, visual_points_local,
-//                   visual_points_longterm, bytes}, plus run-specific counters
+//   stats.json      frames, visual_frames, degenerate_frames, timed_frames, timing_ms {lio, vio,
+//                   vio_per_visual_frame, map, total} x {mean, median, p95, max}, peak_rss_mb, map
+//                   {local_voxels, visual_points_local, visual_points_longterm, bytes}, plus
+//                   run-specific counters. Timing statistics cover the frames after initialisation
+//                   (timed_frames: those with a pose); vio_per_visual_frame only the frames that ran
+//                   the visual update (vio averages over every timed frame, zeros included).
 #pragma once
 
 #include "livo/common/so3.hpp"
