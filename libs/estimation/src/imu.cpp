@@ -80,13 +80,11 @@ std::string ImuInitializer::describe() const {
 
 // ---------------- propagation ----------------
 
-void ImuPropagator::step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt,
-                         ImuTracePoint* tp) const {
+StateCov ImuPropagator::transition(const NavState& x, const Vec3& gyro, const Vec3& accel, double dt) const {
   const Vec3 w = gyro - x.bg;                 // unbiased rate
   const Vec3 a = accel * accel_scale_ - x.ba;  // unbiased specific force
-  const Mat3 R0 = x.R_world_imu;
-
-  // Transition of the error state (identity except the blocks below), evaluated at the interval start.
+  const Mat3& R0 = x.R_world_imu;
+  // Identity except the blocks below, evaluated at the interval start.
   StateCov F = StateCov::Identity();
   using namespace sidx;
   F.block<3, 3>(kRot, kRot) = expSO3(-w * dt);
@@ -98,6 +96,16 @@ void ImuPropagator::step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3&
   F.block<3, 3>(kVel, kRot) = -R0 * hat(a) * dt;
   F.block<3, 3>(kVel, kBa) = -R0 * dt;
   F.block<3, 3>(kVel, kGrav) = Mat3::Identity() * dt;
+  return F;
+}
+
+void ImuPropagator::step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt,
+                         ImuTracePoint* tp) const {
+  const Vec3 w = gyro - x.bg;                 // unbiased rate
+  const Vec3 a = accel * accel_scale_ - x.ba;  // unbiased specific force
+  const Mat3 R0 = x.R_world_imu;
+  const StateCov F = transition(x, gyro, accel, dt);
+  using namespace sidx;
 
   // Discretised continuous-time noise densities (variance = density^2 * dt).
   const double s = cfg_.noise_scale * cfg_.noise_scale;

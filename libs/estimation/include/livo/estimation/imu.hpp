@@ -77,6 +77,11 @@ class ImuPropagator {
   /// Pose at time t from a trace (t within or slightly outside it: extrapolates with the end intervals).
   static Pose poseAt(const std::vector<ImuTracePoint>& trace, Utime t);
 
+  /// The error-state transition F of one interval of length dt starting at `x` with the raw samples
+  /// `gyro` / `accel` (identity except the blocks of ALGORITHMS.md section 1; what propagate() uses
+  /// in P' = F P F^T + Q).
+  StateCov transition(const NavState& x, const Vec3& gyro, const Vec3& accel, double dt) const;
+
  private:
   void step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt, ImuTracePoint* tp) const;
   ImuConfig cfg_;
