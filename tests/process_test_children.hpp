@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <fcntl.h>
+#include <functional>
 #include <string>
 #include <sys/wait.h>
 #include <thread>
@@ -18,6 +19,18 @@ inline const std::string kBin = std::string(LIVO_BINARY_DIR) + "/bin";
 inline const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
 inline void sleepS(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
+/// Polls `cond` every 20 ms until it holds or `deadline_s` seconds have passed; returns whether it
+/// held. Tests wait for a condition (a line in a log, poses written, a process gone) with a generous
+/// deadline, never for a fixed time.
+inline bool waitUntil(const std::function<bool()>& cond, double deadline_s) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(deadline_s);
+  while (!cond()) {
+    if (std::chrono::steady_clock::now() >= end) return cond();
+    sleepS(0.02);
+  }
+  return true;
+}
 
 /// A child process with stdout and stderr in `log_path`.
 struct Child {

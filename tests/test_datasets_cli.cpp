@@ -2,6 +2,8 @@
 // livo-test-deps: livo_io livo_common opencv_core opencv_imgcodecs
 #include "datasets_test_util.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -16,7 +18,7 @@ using namespace livo::test;
 
 TEST(LivoConvert, BinaryEndToEnd) {
   const std::string bin = std::string(LIVO_BINARY_DIR) + "/bin/livo-convert";
-  if (!fs::exists(bin)) GTEST_SKIP() << "binary not built: " << bin;
+  if (!fs::exists(bin)) LIVO_SKIP() << "binary not built: " << bin;
   SyntheticEuroc s;
   const std::string out = s.dir / "e.lcm", rig = s.dir / "rig.yaml", txt = s.dir / "stdout.txt";
   int rc = std::system((bin + " euroc " + s.dir.path.string() + " --out " + out + " --rig " + rig + " --quiet > " +

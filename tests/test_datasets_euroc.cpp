@@ -10,6 +10,8 @@
 #include "livo/io/convert.hpp"
 #include "livo/io/log.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
@@ -187,7 +189,7 @@ TEST(Euroc, RigYamlIsAValidConfig) {
 // ---------------- EuRoC micro set (shared data) ----------------
 
 TEST(EurocMicro, ConvertAndReadBack) {
-  if (!fs::exists(kEuroc / "mav0")) GTEST_SKIP() << "shared data absent: " << kEuroc;
+  if (!fs::exists(kEuroc / "mav0")) LIVO_SKIP() << "shared data absent: " << kEuroc;
   TempDir t;
   const std::string out = t / "euroc.lcm";
   const ConversionSummary sum = convertEuroc(kEuroc.string(), out);
@@ -259,7 +261,7 @@ TEST(EurocMicro, ConvertAndReadBack) {
 }
 
 TEST(EurocMicro, RigFromSensorYaml) {
-  if (!fs::exists(kEuroc / "mav0")) GTEST_SKIP() << "shared data absent: " << kEuroc;
+  if (!fs::exists(kEuroc / "mav0")) LIVO_SKIP() << "shared data absent: " << kEuroc;
   const EurocCalibration c = readEurocCalibration((kEuroc / "mav0").string());
   EXPECT_EQ(c.camera.width, 752);
   EXPECT_EQ(c.camera.height, 480);

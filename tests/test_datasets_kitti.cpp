@@ -8,6 +8,8 @@
 #include "livo/io/convert.hpp"
 #include "livo/io/log.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,7 +43,7 @@ std::vector<float> readFloatsOracle(const fs::path& p) {
 // ---------------- KITTI-style scans ----------------
 
 TEST(Kitti, Kitti00AutoDetectsXyzAndKeepsValues) {
-  if (!fs::exists(kScans / "kitti_00")) GTEST_SKIP() << "shared data absent: " << kScans;
+  if (!fs::exists(kScans / "kitti_00")) LIVO_SKIP() << "shared data absent: " << kScans;
   // Note: despite the data README ("x,y,z,intensity"), these files hold x,y,z records: 000001.bin is
   // 1495260 bytes, a multiple of 12 but not of 16, and auto-detection must pick xyz for the folder.
   TempDir t;
@@ -73,7 +75,7 @@ TEST(Kitti, Kitti00AutoDetectsXyzAndKeepsValues) {
 }
 
 TEST(Kitti, Newer06PairsTimesFiles) {
-  if (!fs::exists(kScans / "newer_06")) GTEST_SKIP() << "shared data absent: " << kScans;
+  if (!fs::exists(kScans / "newer_06")) LIVO_SKIP() << "shared data absent: " << kScans;
   TempDir t;
   KittiOptions opt;
   // Two series (raw_*, deskewed_*) in one folder: the converter must ask which one.
@@ -103,7 +105,7 @@ TEST(Kitti, Newer06PairsTimesFiles) {
 }
 
 TEST(Kitti, DumpLayoutWithSubfolders) {
-  if (!fs::exists(kScans / "kitti_07_dump")) GTEST_SKIP() << "shared data absent: " << kScans;
+  if (!fs::exists(kScans / "kitti_07_dump")) LIVO_SKIP() << "shared data absent: " << kScans;
   TempDir t;
   KittiOptions opt;
   opt.synth_times = SynthTimes::Azimuth;

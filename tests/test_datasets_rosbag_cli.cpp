@@ -3,6 +3,8 @@
 // livo-test-bins: livo-convert
 #include "datasets_rosbag_test_util.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 using namespace livo;
@@ -13,7 +15,7 @@ using namespace livo::test;
 
 TEST(Rosbag, LivoConvertBinary) {
   const std::string bin = std::string(LIVO_BINARY_DIR) + "/bin/livo-convert";
-  if (!fs::exists(bin)) GTEST_SKIP() << "binary not built: " << bin;
+  if (!fs::exists(bin)) LIVO_SKIP() << "binary not built: " << bin;
   TempDir t;
   writeImuBag(t / "b.bag", 20, rosbag::compression::LZ4);
   const std::string out = t / "b.lcm", txt = t / "out.txt", err = t / "err.txt";

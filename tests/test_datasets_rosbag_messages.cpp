@@ -5,6 +5,8 @@
 // livo-test-deps: livo_io livo_rosbag_storage
 #include "datasets_rosbag_test_util.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 using namespace livo;
@@ -21,7 +23,7 @@ TEST(Rosbag, BuiltWithoutBagSupportSaysSo) {
       EXPECT_NE(std::string(e.what()).find("no ROS bag support"), std::string::npos) << e.what();
     }
   }
-  GTEST_SKIP() << "built without librosbag-storage-dev or libsensor-msgs-dev: bag tests skipped";
+  LIVO_SKIP() << "built without librosbag-storage-dev or libsensor-msgs-dev: bag tests skipped";
 }
 
 #endif

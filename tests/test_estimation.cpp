@@ -8,6 +8,8 @@
 #include "livo/eval/tum.hpp"
 #include "livo/map/point_cov.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -174,7 +176,7 @@ TEST(Imu, InitialisationWaitsForStaticWindow) {
 // within the drift expected from its noise.
 TEST(Imu, EurocPropagationAgainstGroundTruth) {
   const std::string dir = std::string(LIVO_SHARED_DATA) + "/euroc_v1_01_micro";
-  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no reference data at " << dir;
+  if (!std::filesystem::exists(dir)) LIVO_SKIP() << "no reference data at " << dir;
   const Trajectory gt = readTum(dir + "/groundtruth_V1_01_easy_200hz_tum.txt");
   std::ifstream in(dir + "/mav0/imu0/data.csv");
   std::string line;
@@ -432,7 +434,7 @@ TEST(Degeneracy, SigmaMinOfPlaneFamilies) {
 // registration optimum lies ~5 cm from it whatever the start.
 TEST(LioUpdate, KittiScansRegisterToMapOfPreviousScans) {
   const std::string dir = std::string(LIVO_SHARED_DATA) + "/kitti_newer_college_scans/kitti_07_dump";
-  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no reference data at " << dir;
+  if (!std::filesystem::exists(dir)) LIVO_SKIP() << "no reference data at " << dir;
   std::vector<Pose> poses;
   {
     std::ifstream g(dir + "/graph.txt");

@@ -5,6 +5,8 @@
 #include "livo/datasets/euroc.hpp"
 #include "livo/estimation/vio_update.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -200,7 +202,7 @@ bool loadEurocScene(EurocScene& s) {
 
 TEST(VioUpdate, EurocRecoversKnownBrightnessChangeAsExposure) {
   EurocScene s;
-  if (!loadEurocScene(s)) GTEST_SKIP() << "no reference data";
+  if (!loadEurocScene(s)) LIVO_SKIP() << "no reference data";
   ASSERT_GT(s.points.size(), 50u);
   // The same view, 30 % darker: tau_k I_k = tau_ref P_ref gives tau_k = 1 / 0.7.
   Image dark = s.img;
@@ -222,7 +224,7 @@ TEST(VioUpdate, EurocRecoversKnownBrightnessChangeAsExposure) {
 
 TEST(VioUpdate, EurocPullsPerturbedPoseBackToTruth) {
   EurocScene s;
-  if (!loadEurocScene(s)) GTEST_SKIP() << "no reference data";
+  if (!loadEurocScene(s)) LIVO_SKIP() << "no reference data";
   std::vector<VisualPoint*> ptrs;
   for (auto& p : s.points) ptrs.push_back(&p);
   NavState x;

@@ -6,6 +6,8 @@
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/report.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -97,7 +99,7 @@ double jsonNumber(const std::string& json, const std::string& key) {
 }  // namespace
 
 TEST(LivoEvalBinary, JsonMatchesTheLibraryAndTheOracle) {
-  if (!haveBinary()) GTEST_SKIP() << "build the livo-eval target first (" << LIVO_BINARY_DIR << "/bin)";
+  if (!haveBinary()) LIVO_SKIP() << "build the livo-eval target first (" << LIVO_BINARY_DIR << "/bin)";
   const Trajectory gt = syntheticTrajectory();
   const double sigma = 0.03;
   const std::string gt_path = writeTrajectory("e2e_gt.tum", gt);
@@ -130,7 +132,7 @@ TEST(LivoEvalBinary, JsonMatchesTheLibraryAndTheOracle) {
 }
 
 TEST(LivoEvalBinary, OptionsAndErrorsGiveExitCodesAndMessages) {
-  if (!haveBinary()) GTEST_SKIP() << "build the livo-eval target first (" << LIVO_BINARY_DIR << "/bin)";
+  if (!haveBinary()) LIVO_SKIP() << "build the livo-eval target first (" << LIVO_BINARY_DIR << "/bin)";
   const Trajectory gt = syntheticTrajectory();
   const std::string gt_path = writeTrajectory("cli_gt.tum", gt);
 

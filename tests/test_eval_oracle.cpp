@@ -6,6 +6,8 @@
 
 #include "livo/eval/evaluate.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -111,14 +113,14 @@ TEST(EvalOracle, SyntheticSim3) { checkOracle(syntheticTrajectory(), true); }
 TEST(EvalOracle, SyntheticRotationNoise) { checkRotationOracle(syntheticTrajectory()); }
 
 TEST(EvalOracle, EurocSe3) {
-  if (!haveEuroc()) GTEST_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
+  if (!haveEuroc()) LIVO_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
   checkOracle(readTum(kEurocGt), false);
 }
 TEST(EvalOracle, EurocSim3) {
-  if (!haveEuroc()) GTEST_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
+  if (!haveEuroc()) LIVO_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
   checkOracle(readTum(kEurocGt), true);
 }
 TEST(EvalOracle, EurocRotationNoise) {
-  if (!haveEuroc()) GTEST_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
+  if (!haveEuroc()) LIVO_SKIP() << "EuRoC ground truth not found at " << kEurocGt;
   checkRotationOracle(readTum(kEurocGt));
 }

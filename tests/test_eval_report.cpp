@@ -6,6 +6,8 @@
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/tum.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -41,7 +43,7 @@ int run(const std::string& cmd, std::string& out, const std::string& dir) {
 }  // namespace
 
 TEST(LivoReport, PlotsAndSummaryOfARunWithAKnownError) {
-  if (!haveMatplotlib()) GTEST_SKIP() << "python3-matplotlib missing";
+  if (!haveMatplotlib()) LIVO_SKIP() << "python3-matplotlib missing";
   const fs::path dir = fs::temp_directory_path() / ("livo_report_" + std::to_string(::getpid()));
   fs::create_directories(dir / "run");
   // Ground truth: a circle; estimate: rotated + shifted copy with noise (ATE after alignment = noise).

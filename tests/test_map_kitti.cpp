@@ -3,6 +3,8 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/map/voxel_map.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -44,7 +46,7 @@ std::vector<PointWithCov> toWorld(const std::vector<Vec3>& body, const Pose& T_w
 TEST(RealData, KittiScanMatchesTheMapOfThePreviousScan) {
   const std::string dir = std::string(LIVO_SHARED_DATA) + "/kitti_newer_college_scans/kitti_07_dump";
   std::ifstream graph(dir + "/graph.txt");
-  if (!graph || !std::ifstream(dir + "/000000/points.bin")) GTEST_SKIP() << "no KITTI data in " << dir;
+  if (!graph || !std::ifstream(dir + "/000000/points.bin")) LIVO_SKIP() << "no KITTI data in " << dir;
   std::vector<Pose> poses;
   std::string line;
   while (std::getline(graph, line)) {

@@ -96,7 +96,8 @@ RunSummary runScenario(sim::SimScenario sc, double duration_s, const std::string
 TEST(Pipeline, RoomAviaLidarInertialAccuracy) {
   const RunSummary r = runScenario(sim::loadScenarioFile(scenarioPath("room")), 25.0);
   ASSERT_GT(r.est.size(), 200u);
-  EXPECT_LE(r.eval.ate.translation_m.rmse, 0.03) << "room ATE RMSE must stay within 3 cm";
+  // Measured 0.516 cm over 25.3 m (2026-12-01); the bound is about twice that.
+  EXPECT_LE(r.eval.ate.translation_m.rmse, 0.010) << "room LiDAR-inertial ATE RMSE";
   // The loop passes a bare stretch of wall (wall + floor + ceiling only): a few frames are legitimately
   // degenerate there, most are not.
   EXPECT_LT(r.degenerate_frames, r.est.size() / 5) << "a furnished room is mostly not LiDAR-degenerate";
@@ -107,7 +108,8 @@ TEST(Pipeline, StreetSpinningLidarInertialDrift) {
   const RunSummary r = runScenario(sim::loadScenarioFile(scenarioPath("street")), 40.0);
   ASSERT_GT(r.est.size(), 300u);
   ASSERT_GT(r.eval.path_length_m, 100.0);
-  EXPECT_LE(r.eval.ate.translation_m.rmse, 0.005 * r.eval.path_length_m) << "street ATE within 0.5% of the path length";
+  // Measured 1.35 cm over 345.5 m (0.004% of the path, 2026-12-01); the bound is about twice that.
+  EXPECT_LE(r.eval.ate.translation_m.rmse, 0.027) << "street LiDAR-inertial ATE RMSE over " << r.eval.path_length_m << " m";
 }
 
 // The corridor's walls, floor and ceiling constrain nothing along its axis: the metric flags it and
@@ -121,8 +123,9 @@ TEST(Pipeline, CorridorIsDegenerateAndAdaptiveVisualFixesIt) {
   EXPECT_LT(off.mean_sigma_min, 0.07);
   const RunSummary adaptive = runScenario(sc, 20.0, "adaptive");
   ASSERT_GT(adaptive.est.size(), 150u);
+  // Measured (2026-12-01): off 361 cm, adaptive 0.350 cm; the bound is about twice the adaptive figure.
   EXPECT_LE(adaptive.eval.ate.translation_m.rmse, off.eval.ate.translation_m.rmse / 3.0);
-  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, 0.10);
+  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, 0.007);
   EXPECT_GT(adaptive.visual_frames, adaptive.images / 2) << "degenerate frames run the visual update";
 }
 
@@ -142,7 +145,9 @@ TEST(Pipeline, RoomAdaptiveUsesFewImagesAtTheAccuracyOfAll) {
   const RunSummary all = runScenario(sc, 25.0, "all");
   const RunSummary adaptive = runScenario(sc, 25.0, "adaptive");
   ASSERT_GT(adaptive.images, 200u);
-  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, all.eval.ate.translation_m.rmse + 0.01);
+  // Measured (2026-12-01): all 0.260 cm (239 images), adaptive 0.600 cm (62 images); bounds about twice.
+  EXPECT_LE(all.eval.ate.translation_m.rmse, 0.0052);
+  EXPECT_LE(adaptive.eval.ate.translation_m.rmse, 0.012);
   EXPECT_GT(all.visual_frames, all.images * 9 / 10);
   EXPECT_LE(double(adaptive.visual_frames), 0.3 * double(adaptive.images));
 }

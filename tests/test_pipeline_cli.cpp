@@ -3,6 +3,8 @@
 // livo-test-bins: livo-sim livo-run livo-eval
 #include "pipeline_cli_test_util.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -19,7 +21,7 @@ using livo::test::slurp;
 
 TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
   for (const char* b : {"livo-sim", "livo-run", "livo-eval"})
-    if (!fs::exists(bin(b))) GTEST_SKIP() << bin(b) << " not built";
+    if (!fs::exists(bin(b))) LIVO_SKIP() << bin(b) << " not built";
   const fs::path dir = fs::temp_directory_path() / ("livo_test_cli_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string log = (dir / "demo.lcm").string(), gt = (dir / "gt.tum").string(), rig = (dir / "rig.yaml").string();

@@ -29,6 +29,8 @@
 #include "livo/eval/evaluate.hpp"
 #include "pipeline_cli_test_util.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -130,7 +132,7 @@ class StreetMemory : public ::testing::Test {
   }
 
   void SetUp() override {
-    if (!skip_.empty()) GTEST_SKIP() << skip_;
+    if (!skip_.empty()) LIVO_SKIP() << skip_;
     ASSERT_TRUE(error_.empty()) << error_;
   }
 

@@ -84,7 +84,7 @@ TEST(EstimatorOverMemq, RoundTripGivesTheSingleProcessTrajectory) {
   }
   std::cout << "memq round trip: " << out.odom.size() << " poses, max difference to the single process " << worst * 1e3
             << " mm\n" << est.summary() << server.summary();
-  EXPECT_LE(worst, 0.02);
+  EXPECT_LE(worst, 5e-6);  // measured 0.0026 mm (2026-12-01); about twice that
   EXPECT_EQ(est.counters().timeouts, 0u);
   EXPECT_EQ(est.counters().late_submaps, 0u);
   EXPECT_EQ(out.stats.size(), sf.frames.size());
@@ -151,7 +151,7 @@ TEST(EstimatorOverMemq, LostDuplicatedAndMalformedAnswersNeverStallIt) {
   }());
   std::cout << dropped << " answers lost, " << duplicated << " duplicated, " << garbage << " garbage: ATE " << e * 100
             << " cm\n";
-  EXPECT_LE(e, 0.05);
+  EXPECT_LE(e, 0.006);  // measured 0.297 cm (2026-12-01); about twice that
 }
 
 TEST(EstimatorOverMemq, NoMapServerAtAllStillPublishesOdometry) {

@@ -11,6 +11,8 @@
 #include "process_test_children.hpp"
 #include "process_test_files.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <csignal>
@@ -26,7 +28,7 @@ using test::kBin;
 using test::kUrl;
 using test::Netns;
 using test::readFile;
-using test::sleepS;
+using test::waitUntil;
 
 namespace {
 
@@ -85,12 +87,26 @@ struct Suite {
     exporter = std::make_unique<Child>(ns.exec({kBin + "/livo-exporter", "--config", rig, "--lcm-url", kUrl, "--out",
                                                 out + "/export", "--idle-exit", "10"}),
                                        out + "/exporter.txt");
-    sleepS(1.5);  // all subscribed
+    for (const char* log : {"/estimator.txt", "/preprocess.txt", "/exporter.txt"}) awaitReady(out + log);
+  }
+  /// Each process prints its channels "... on URL" once it has subscribed.
+  static void awaitReady(const std::string& log) {
+    EXPECT_TRUE(waitUntil([&] { return readFile(log).find(" on " + kUrl) != std::string::npos; }, 60))
+        << log << ":\n" << readFile(log);
   }
   void startMapServer(const std::string& log_name) {
     mapserver = std::make_unique<Child>(ns.exec({kBin + "/livo-mapserver", "--config", rig, "--lcm-url", kUrl,
                                                  "--map-file", out + "/map.bin"}),
                                         out + "/" + log_name);
+    awaitReady(out + "/" + log_name);
+  }
+  /// Waits until the exporter has written `n` poses (trajectory.tum is flushed per line).
+  bool awaitPoses(std::size_t n) const {
+    return waitUntil([&] { return test::countLines(out + "/export/trajectory.tum") >= n + 1; }, 120);  // + header
+  }
+  /// Waits until the estimator's log says `text`.
+  bool awaitEstimatorSays(const std::string& text) const {
+    return waitUntil([&] { return readFile(out + "/estimator.txt").find(text) != std::string::npos; }, 120);
   }
   std::unique_ptr<Child> play(const std::string& log) const {
     return std::make_unique<Child>(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=1", log}),
@@ -112,8 +128,8 @@ struct Suite {
 
 TEST(SuiteNetns, FourProcessesMatchLivoRunAndGroundTruth) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!test::haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!test::haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const DemoLog& d = demoLog();
   ASSERT_TRUE(d.ok) << d.error;
   Suite suite(ns, d.rig, d.dir + "/suite");
@@ -130,8 +146,12 @@ TEST(SuiteNetns, FourProcessesMatchLivoRunAndGroundTruth) {
   const double ate_single = ate(gt, d.single), ate_split = ate(gt, split);
   std::cout << "demo: livo-run ATE " << ate_single * 100 << " cm (" << d.single.size() << " poses), four processes "
             << ate_split * 100 << " cm (" << split.size() << " poses)\n";
-  EXPECT_LE(std::abs(ate_split - ate_single), 0.02) << "the suite and livo-run agree within 2 cm";
-  EXPECT_LE(ate_split, 0.05);
+  // Measured (2026-12-01): livo-run 0.92180 cm, four processes 0.92213 cm, no timeouts (lock step:
+  // the same frames and answers as the in-process split test). Bounds about twice that; a run whose
+  // estimator timed out (a loaded machine) is held to the lost-answers bound of test_pipeline_remote.
+  const bool no_timeouts = est_log.find(", timeouts 0,") != std::string::npos;
+  EXPECT_LE(std::abs(ate_split - ate_single), no_timeouts ? 7e-6 : 0.005) << "the suite and livo-run agree";
+  EXPECT_LE(ate_split, 0.0185);
   EXPECT_NE(map_log.find("saved " + suite.out + "/map.bin"), std::string::npos) << map_log;
   EXPECT_NE(readFile(suite.out + "/export/stats.json").find("\"frames\""), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(suite.out + "/export/map.pcd"));
@@ -139,16 +159,18 @@ TEST(SuiteNetns, FourProcessesMatchLivoRunAndGroundTruth) {
 
 TEST(SuiteNetns, MapServerKilledAndRestartedEstimatorRecovers) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!test::haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!test::haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const DemoLog& d = demoLog();
   ASSERT_TRUE(d.ok) << d.error;
   Suite suite(ns, d.rig, d.dir + "/restart");
   auto player = suite.play(d.log);
-  sleepS(8.0);  // the demo lasts 20 s: kill the map server at about a third of it
+  // The demo gives 191 poses: kill the map server at about a third of them, restart it once the
+  // estimator has run without answers.
+  ASSERT_TRUE(suite.awaitPoses(65)) << readFile(suite.out + "/estimator.txt");
   suite.mapserver->signal(SIGKILL);
   suite.mapserver->wait(10);
-  sleepS(1.0);  // the estimator runs without answers meanwhile
+  ASSERT_TRUE(suite.awaitEstimatorSays("no submap for request")) << readFile(suite.out + "/estimator.txt");
   suite.startMapServer("mapserver2.txt");
   EXPECT_EQ(player->wait(120), 0) << readFile(suite.out + "/player.txt");
   suite.finish();
@@ -161,20 +183,25 @@ TEST(SuiteNetns, MapServerKilledAndRestartedEstimatorRecovers) {
   ASSERT_GT(split.size(), d.single.size() * 9 / 10) << "odometry kept coming while the map server was down\n" << est_log;
   const double e = ate(readTum(d.gt), split);
   std::cout << "demo with the map server killed for ~1 s: ATE " << e * 100 << " cm (" << split.size() << " poses)\n";
-  EXPECT_LE(e, 0.15) << "the estimator recovers on the rebuilt map";
+  // Measured 1.08-1.18 cm (2026-11 and 2026-12-01: the kill's timing varies); about twice that.
+  EXPECT_LE(e, 0.024) << "the estimator recovers on the rebuilt map";
 }
 
 TEST(SuiteNetns, EstimatorStartedBeforeTheMapServerAndExporterKilled) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!test::haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!test::haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const DemoLog& d = demoLog();
   ASSERT_TRUE(d.ok) << d.error;
   Suite suite(ns, d.rig, d.dir + "/late", /*with_mapserver=*/false);
   auto player = suite.play(d.log);
-  sleepS(3.0);  // the estimator runs on its own meanwhile
+  // The estimator runs on its own (odometry without answers) for about 2 s of poses, then with the map
+  // server until about 9 s of poses are exported.
+  ASSERT_TRUE(suite.awaitEstimatorSays("no submap for request")) << readFile(suite.out + "/estimator.txt");
+  ASSERT_TRUE(suite.awaitPoses(20)) << readFile(suite.out + "/estimator.txt");
   suite.startMapServer("mapserver.txt");
-  sleepS(6.0);
+  ASSERT_TRUE(suite.awaitEstimatorSays("the map server answers again")) << readFile(suite.out + "/estimator.txt");
+  ASSERT_TRUE(suite.awaitPoses(85)) << readFile(suite.out + "/estimator.txt");
   suite.exporter->signal(SIGKILL);  // no chance to flush anything at exit
   suite.exporter->wait(10);
   const std::size_t lines_at_kill = test::countLines(suite.out + "/export/trajectory.tum");
@@ -194,7 +221,8 @@ TEST(SuiteNetns, EstimatorStartedBeforeTheMapServerAndExporterKilled) {
   const double e = ate(readTum(d.gt), kept);
   std::cout << "estimator alone for 3 s, then with the map server: ATE " << e * 100 << " cm over " << kept.size()
             << " poses\n";
-  EXPECT_LE(e, 0.5) << "IMU-only for 3 s, then LiDAR-inertial on the new map";
+  // Measured 0.74 cm (2026-11 and 2026-12-01); about twice that.
+  EXPECT_LE(e, 0.015) << "without the map server first, then LiDAR-inertial on the new map";
 }
 
 TEST(SuiteBinaries, HelpAndErrorsNameTheProblem) {

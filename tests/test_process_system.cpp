@@ -15,6 +15,8 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -36,9 +38,30 @@ using test::tempDir;
 using test::Child;
 using test::Netns;
 using test::haveTool;
-using test::sleepS;
+using test::waitUntil;
 using test::kBin;
 using test::kUrl;
+
+namespace {
+
+/// Whether `path` says `text` within `deadline_s` seconds.
+bool saysWithin(const std::string& path, const std::string& text, double deadline_s) {
+  return waitUntil([&] { return readFile(path).find(text) != std::string::npos; }, deadline_s);
+}
+
+/// Complete events in an LCM log that may still be written to.
+std::size_t completeEvents(const std::string& path) {
+  std::size_t n = 0;
+  try {
+    LogReader reader(path);
+    LogEvent ev;
+    while (reader.next(ev)) ++n;
+  } catch (const std::exception&) {  // a partly written last event, or no file yet
+  }
+  return n;
+}
+
+}  // namespace
 namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- command line of the binaries
@@ -72,8 +95,8 @@ TEST(ProcessBinaries, HelpAndErrorsNameTheProblem) {
 
 TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) GTEST_SKIP() << "lcm-logplayer / lcm-logger missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
   const std::string dir = tempDir("preprocess");
   const test::SensorStream stream = test::makeSensorStream(2.0);
   {
@@ -82,16 +105,19 @@ TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
   }
   std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
 
-  Child logger(ns.exec({"lcm-logger", "-f", "-q", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
+  Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
                dir + "/logger.txt");
   Child pre(ns.exec({kBin + "/livo-preprocess", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--idle-exit",
                      "2", "--report-interval", "1"}),
             dir + "/preprocess.txt");
-  sleepS(1.0);  // both subscribed
+  // Started before the preprocessor, the logger has subscribed by the time the preprocessor says it has.
+  ASSERT_TRUE(saysWithin(dir + "/logger.txt", "Opening log file", 60)) << readFile(dir + "/logger.txt");
+  ASSERT_TRUE(saysWithin(dir + "/preprocess.txt", " on " + kUrl, 60)) << readFile(dir + "/preprocess.txt");
   Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=2", dir + "/in.lcm"}), dir + "/player.txt");
   EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
   EXPECT_EQ(pre.wait(60), 0) << readFile(dir + "/preprocess.txt");  // --idle-exit: flushes, then exits
-  sleepS(0.5);
+  // The logger flushes every 100 ms: wait until the 21 frames are on disk (or the deadline).
+  waitUntil([&] { return completeEvents(dir + "/out.lcm") >= 21; }, 30);
   logger.signal(SIGINT);
   logger.wait(30);
 
@@ -121,8 +147,8 @@ TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
 
 TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!haveTool("lcm-logplayer")) GTEST_SKIP() << "lcm-logplayer missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const std::string dir = tempDir("exporter");
   const auto frames = test::makeEstimatorFrames(20);
   {
@@ -138,11 +164,11 @@ TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   Child exporter(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out",
                           dir + "/out"}),
                  dir + "/exporter.txt");
-  sleepS(1.0);
+  ASSERT_TRUE(saysWithin(dir + "/exporter.txt", " on " + kUrl, 60)) << readFile(dir + "/exporter.txt");
   Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=2", dir + "/est.lcm"}), dir + "/player.txt");
   EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
-  sleepS(0.5);
-  // Before the stop: the trajectory is on disk already.
+  // Before the stop: the trajectory is on disk already (once the last messages are handled).
+  waitUntil([&] { return countLines(dir + "/out/trajectory.tum") >= 20; }, 30);
   EXPECT_EQ(countLines(dir + "/out/trajectory.tum"), 20u);  // '#' header + 19 poses
   exporter.signal(SIGINT);
   EXPECT_EQ(exporter.wait(60), 0) << readFile(dir + "/exporter.txt");
@@ -166,7 +192,7 @@ TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
 // ---------------------------------------------------------------- procman/run-local
 
 TEST(RunLocal, StartsAGroupRestartsACrashedCommandAndStopsAllOnSigterm) {
-  if (!haveTool("python3")) GTEST_SKIP() << "python3 missing";
+  if (!haveTool("python3")) LIVO_SKIP() << "python3 missing";
   const std::string dir = tempDir("runlocal");
   // Each command appends its pid to a file, then becomes `sleep` (same pid).
   auto cmd = [&](const std::string& name) {
@@ -180,7 +206,7 @@ TEST(RunLocal, StartsAGroupRestartsACrashedCommandAndStopsAllOnSigterm) {
             "DIR=" + dir},
            dir + "/run-local.txt");
   auto waitLines = [&](const std::string& f, std::size_t n) {
-    for (int i = 0; i < 500 && countLines(f) < n; ++i) sleepS(0.02);
+    waitUntil([&] { return countLines(f) >= n; }, 30);
     return countLines(f);
   };
   ASSERT_EQ(waitLines(dir + "/a.pids", 1), 1u) << readFile(dir + "/run-local.txt");
@@ -201,7 +227,7 @@ TEST(RunLocal, StartsAGroupRestartsACrashedCommandAndStopsAllOnSigterm) {
 }
 
 TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
-  if (!haveTool("python3")) GTEST_SKIP() << "python3 missing";
+  if (!haveTool("python3")) LIVO_SKIP() << "python3 missing";
   const std::string dir = tempDir("runlocal_pmd");
   const std::string rl = std::string(LIVO_SOURCE_DIR) + "/procman/run-local";
   int rc = std::system((rl + " replay --dry-run --var LIVO_BIN=" + kBin + " --var LOG=my.lcm > " + dir +
@@ -229,8 +255,8 @@ TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
 
 TEST(RunLocal, ReplayScriptOfLivoPmdRunsTheChainAndStopsIt) {
   Netns ns;
-  if (!ns.ok) GTEST_SKIP() << ns.why;
-  if (!haveTool("python3") || !haveTool("lcm-logplayer")) GTEST_SKIP() << "python3 or lcm-logplayer missing";
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("python3") || !haveTool("lcm-logplayer")) LIVO_SKIP() << "python3 or lcm-logplayer missing";
   const std::string dir = tempDir("runlocal_replay");
   // The estimator and the map server are stand-ins that exit 0 on SIGINT; the others are the real ones.
   fs::create_directories(dir + "/bin");

@@ -7,6 +7,8 @@
 #include "livo/sensors/camera_model.hpp"
 #include "livo/sensors/camera_model_undistort.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -56,7 +58,7 @@ MapComparison compareMaps(const CameraModel& cam, const IdealPinhole& ideal, con
 }  // namespace
 
 TEST(EurocCamera, UndistortionMatchesOpenCv) {
-  if (!fs::exists(kEuroc / "cam0" / "sensor.yaml")) GTEST_SKIP() << "no EuRoC data at " << kEuroc;
+  if (!fs::exists(kEuroc / "cam0" / "sensor.yaml")) LIVO_SKIP() << "no EuRoC data at " << kEuroc;
   for (const char* cam_name : {"cam0", "cam1"}) {
     const fs::path dir = kEuroc / cam_name;
     if (!fs::exists(dir / "sensor.yaml")) continue;

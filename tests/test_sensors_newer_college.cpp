@@ -7,6 +7,8 @@
 #include "livo/sensors/preprocess_config.hpp"
 #include "livo/sensors/recombiner.hpp"
 
+#include "test_skip.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -62,7 +64,7 @@ std::vector<LidarScan> newerCollegeScans() {
 
 TEST(NewerCollege, ScanCountsAndTimesSurviveRecombination) {
   const auto scans = newerCollegeScans();
-  if (scans.empty()) GTEST_SKIP() << "no ../shared/data/kitti_newer_college_scans/newer_06";
+  if (scans.empty()) LIVO_SKIP() << "no ../shared/data/kitti_newer_college_scans/newer_06";
   Scenario s;
   s.duration_s = 0.35;
   Data d = generate(s);  // IMU and 10 Hz images at phase 37 ms
@@ -111,7 +113,7 @@ TEST(NewerCollege, ScanCountsAndTimesSurviveRecombination) {
 
 TEST(NewerCollege, DownsampleTiming) {
   const auto scans = newerCollegeScans();
-  if (scans.empty()) GTEST_SKIP() << "no ../shared/data/kitti_newer_college_scans/newer_06";
+  if (scans.empty()) LIVO_SKIP() << "no ../shared/data/kitti_newer_college_scans/newer_06";
   for (float leaf : {0.1f, 0.2f, 0.5f}) {
     const int reps = 30;
     std::size_t out_size = 0;
