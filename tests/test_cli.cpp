@@ -22,7 +22,7 @@ struct Demo {
   std::string log, config, mode = "adaptive", name;
   std::int64_t max_frames = -1;
   int threads = 2, offset = 0;
-  double idle_s = 0.0, rate_hz = 10.0;
+  double idle_s = 0.0, rate_hz = 10.0, duration_s = 0.0;
   std::vector<double> deltas;
   bool quiet = false, print_config = false;
   Fields fields = Fields::Auto;
@@ -35,6 +35,7 @@ struct Demo {
     cl.choice("--visual-mode", &mode, {"adaptive", "all", "off"}, "when to use the camera");
     cl.choice("--fields", &fields, {{"auto", Fields::Auto}, {"xyz", Fields::Xyz}, {"xyzi", Fields::Xyzi}}, "record");
     cl.count("--max-frames", &max_frames, "N", "stop after N frames").defaultText("all");
+    cl.number("--duration", &duration_s, "S", "how long", 0.0, true).unit("s").defaultText("the scenario's");
     cl.integer("--threads", &threads, "N", "worker threads", 1, 16);
     cl.integer("--offset", &offset, "K", "a signed integer");
     cl.number("--idle-exit", &idle_s, "S", "exit after S idle seconds", 0.0).unit("s");
@@ -151,7 +152,7 @@ TEST(CommandLine, HelpListsDefaultsUnitsRequiredAndExitCodes) {
                         "--config CFG.yaml", "rig config (required)", "--visual-mode adaptive|all|off",
                         "[default: adaptive]", "--fields auto|xyz|xyzi", "[default: auto]", "[default: all]",
                         "--threads N", "[default: 2]", "--idle-exit S", "[default: 0 s]", "--rate-hz HZ",
-                        "[default: 10 Hz]", "RPE distance (repeatable) [m]", "-h, --help", "--version",
+                        "[default: 10 Hz]", "RPE distance (repeatable) [m]", "how long [s; default: the scenario's]", "-h, --help", "--version",
                         "exit status: 0 ok, 1 run-time error, 2 usage or configuration error\n"})
     EXPECT_NE(help.find(s), std::string::npos) << s << "\n" << help;
   EXPECT_EQ(help.find("--name NAME              a name ["), std::string::npos) << "an empty default is not shown";

@@ -75,6 +75,7 @@ Option& Option::unit(std::string u) {
 }
 Option& Option::defaultText(std::string text) {
   default_text = std::move(text);
+  custom_default = true;
   return *this;
 }
 
@@ -396,8 +397,12 @@ std::string CommandLine::optionsHelp(bool with_builtins) const {
     if (o->is_required && (o->kind != Option::Kind::kPositional || !o->required_unless.empty()))
       body += o->required_unless.empty() ? " (required)" : " (required unless " + o->required_unless + ")";
     if (o->repeatable) body += " (repeatable)";
-    if (!o->default_text.empty() && o->kind != Option::Kind::kFlag && o->kind != Option::Kind::kPositional)
-      body += " [default: " + o->default_text + (o->unit_.empty() ? "" : " " + o->unit_) + "]";
+    const bool shows_default =
+        !o->default_text.empty() && o->kind != Option::Kind::kFlag && o->kind != Option::Kind::kPositional;
+    if (shows_default && o->custom_default && !o->unit_.empty())
+      body += " [" + o->unit_ + "; default: " + o->default_text + "]";  // "[s; default: the scenario's]"
+    else if (shows_default)
+      body += " [default: " + o->default_text + (o->unit_.empty() ? "" : " " + o->unit_) + "]";  // "[default: 0.5 s]"
     else if (!o->unit_.empty())
       body += " [" + o->unit_ + "]";
     (o->kind == Option::Kind::kPositional ? args : opts) += helpRow(head, body);

@@ -47,7 +47,8 @@ class Option {
   Option& requiredUnless(std::string other);
   /// Unit of the value, shown with the default in the help ("[default: 0.01 s]").
   Option& unit(std::string u);
-  /// Shown instead of the default taken from the destination ("" hides the default).
+  /// Shown instead of the default taken from the destination ("" hides the default); with a unit the
+  /// help reads "[s; default: <text>]".
   Option& defaultText(std::string text);
 
  private:
@@ -56,6 +57,7 @@ class Option {
   std::string name, metavar, help, unit_, default_text;
   Kind kind = Kind::kText;
   bool is_required = false, repeatable = false, seen = false;
+  bool custom_default = false;  ///< default_text set by defaultText(): the unit is shown apart from it
   std::string required_unless;
   std::vector<std::string> choices;
   std::int64_t int_lo = 0, int_hi = 0;
