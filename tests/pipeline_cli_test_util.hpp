@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/wait.h>
+
 namespace livo::test {
 
 namespace fs = std::filesystem;
@@ -29,6 +31,19 @@ inline std::string slurp(const fs::path& p) {
 inline int run(const std::string& cmd, const std::string& log = "") {
   const std::string sink = log.empty() ? std::string("/dev/null") : log;
   return std::system((cmd + " > " + sink + " 2>&1").c_str());
+}
+
+/// Exit status, stdout and stderr of a command.
+struct Ran {
+  int rc = -1;
+  std::string out, err;
+};
+
+/// Runs `cmd` through the shell with stdout and stderr into files of `dir`.
+inline Ran runSplit(const std::string& cmd, const fs::path& dir) {
+  const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+  const int status = std::system((cmd + " > " + out.string() + " 2> " + err.string()).c_str());
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
 }
 
 /// The last `n` lines of a text file (for failure messages).

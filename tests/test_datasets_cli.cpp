@@ -1,8 +1,13 @@
-// Dataset converters through the livo-convert binary, end to end (EuRoC folder, errors, unknown format).
-// livo-test-deps: livo_io livo_common opencv_core opencv_imgcodecs
+// Dataset converters through the livo-convert binary, end to end (EuRoC folder, errors, unknown format),
+// and its command line (sub-commands, --help, --version, usage errors).
+// livo-test-deps: livo_io livo_common livo_cli opencv_core opencv_imgcodecs
+// livo-test-bins: livo-convert
 #include "datasets_test_util.hpp"
 
+#include "livo/cli/command_line.hpp"
 #include "test_skip.hpp"
+
+#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 
@@ -10,6 +15,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
+#include <vector>
 
 using namespace livo;
 using namespace livo::test;
@@ -47,5 +54,57 @@ TEST(LivoConvert, BinaryEndToEnd) {
   EXPECT_NE(rc, 0);
   std::ifstream u(err);
   const std::string utext((std::istreambuf_iterator<char>(u)), std::istreambuf_iterator<char>());
-  EXPECT_TRUE(contains(utext, "unknown format 'bagfile'")) << utext;
+  EXPECT_TRUE(contains(utext, "unknown command 'bagfile'")) << utext;
+}
+
+TEST(LivoConvert, SubCommandsHelpVersionAndUsageErrors) {
+  const std::string bin = std::string(LIVO_BINARY_DIR) + "/bin/livo-convert";
+  if (!fs::exists(bin)) LIVO_SKIP() << "binary not built: " << bin;
+  TempDir dir;
+  struct Ran {
+    int rc;
+    std::string out, err;
+  };
+  auto run = [&](const std::string& args) {
+    const std::string out = dir / "out.txt", err = dir / "err.txt";
+    const int status = std::system((bin + " " + args + " > " + out + " 2> " + err).c_str());
+    auto slurp = [](const std::string& p) {
+      std::ifstream f(p);
+      return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    };
+    return Ran{WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  };
+  Ran r = run("--help");
+  EXPECT_EQ(r.rc, 0);
+  for (const char* s : {"usage: livo-convert euroc|kitti|rosbag ARGS [options]", "commands:\n  euroc",
+                        "usage: livo-convert euroc DIR --out LOG.lcm [options]", "--rate-hz HZ", "[default: 10 Hz]",
+                        "--imu-accel-unit auto|g|mps2", "--fields auto|xyz|xyzi",
+                        "exit status: 0 ok, 1 run-time error, 2 usage or configuration error"})
+    EXPECT_TRUE(contains(r.out, s)) << s << "\n" << r.out;
+  r = run("kitti --help");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out.rfind("usage: livo-convert kitti DIR --out LOG.lcm [options]\n", 0), 0u) << r.out;
+  EXPECT_FALSE(contains(r.out, "--imu-margin")) << r.out;
+  r = run("--version");
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out, std::string("livo-convert ") + livo::projectVersion() + "\n");
+
+  for (const auto& [args, message, hint] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"kitti d --out o.lcm --rate-hz 5x", "--rate-hz: expected a number > 0, got '5x'", "livo-convert kitti"},
+           {"kitti d --out o.lcm --fields xyzrgb", "--fields: expected one of auto|xyz|xyzi, got 'xyzrgb'",
+            "livo-convert kitti"},
+           {"rosbag b.bag --out o.lcm --mono16-bits 17", "--mono16-bits: expected an integer in [9, 16], got '17'",
+            "livo-convert rosbag"},
+           {"euroc d --out o.lcm --rate-hz 5", "unknown option '--rate-hz' (an option of kitti, not of livo-convert euroc)",
+            "livo-convert euroc"},
+           {"euroc --out o.lcm", "missing argument DIR", "livo-convert euroc"},
+           {"euroc d", "--out is required", "livo-convert euroc"},
+           {"bagfile x --out o.lcm", "unknown command 'bagfile' (expected euroc|kitti|rosbag)", "livo-convert"},
+           {"", "missing command (euroc|kitti|rosbag)", "livo-convert"}}) {
+    r = run(args);
+    EXPECT_EQ(r.rc, 2) << args;
+    EXPECT_EQ(r.err, "livo-convert: " + message + "\ntry '" + hint + " --help'\n") << args;
+  }
+  r = run("kitti " + (dir / "missing") + " --out " + (dir / "o.lcm"));  // bad input: 1
+  EXPECT_EQ(r.rc, 1) << r.err;
 }

@@ -1,8 +1,10 @@
 // livo-eval binary: its JSON matches the library and the oracle; options and errors give exit codes and
 // messages.
 // livo-test-bins: livo-eval
+// livo-test-deps: livo_cli
 #include "eval_test_util.hpp"
 
+#include "livo/cli/command_line.hpp"
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/report.hpp"
 
@@ -138,7 +140,15 @@ TEST(LivoEvalBinary, OptionsAndErrorsGiveExitCodesAndMessages) {
 
   RunResult r = runEval("--help");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("--max-dt"), std::string::npos);
+  for (const char* s : {"--max-dt S", "[default: 0.01 s]", "--rpe-delta M", "(repeatable)", "JSON keys:",
+                        "exit status: 0 ok, 1 run-time error, 2 usage or configuration error"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+  r = runEval("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out, std::string("livo-eval ") + livo::projectVersion() + "\n");
+  r = runEval("--gt " + gt_path + " --est " + gt_path + " --max-dt 5x");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "livo-eval: --max-dt: expected a number >= 0, got '5x'\ntry 'livo-eval --help'\n");
 
   // Text report with explicit RPE distances and a time offset.
   Trajectory late = gt;

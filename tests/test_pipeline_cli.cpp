@@ -1,6 +1,10 @@
 // livo-run as users run it: livo-sim writes a short demo log and its rig, livo-run processes it in each
-// visual mode, and the output directory holds every file of the contract with the documented fields.
+// visual mode, and the output directory holds every file of the contract with the documented fields;
+// its command line (errors, --help, --version) and the --print-config round trip.
 // livo-test-bins: livo-sim livo-run livo-eval
+// livo-test-deps: livo_cli
+#include "livo/cli/command_line.hpp"
+
 #include "pipeline_cli_test_util.hpp"
 
 #include "test_skip.hpp"
@@ -9,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -58,5 +63,94 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
   std::ofstream(dir / "bad.yaml") << slurp(rig) << "lio:\n  max_iteratons: 3\n";
   EXPECT_NE(run(bin("livo-run") + " " + log + " --config " + (dir / "bad.yaml").string() + " --out " + (dir / "x").string()), 0);
   EXPECT_NE(run(bin("livo-run") + " " + (dir / "missing.lcm").string() + " --config " + rig + " --out " + (dir / "y").string()), 0);
+  fs::remove_all(dir);
+}
+
+TEST(LivoRun, UsageErrorsNameTheOptionAndTheValueAndExit2) {
+  if (!fs::exists(bin("livo-run"))) LIVO_SKIP() << bin("livo-run") << " not built";
+  const fs::path dir = fs::temp_directory_path() / ("livo_test_cli_usage_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string hint = "try 'livo-run --help'\n";
+  const std::string base = bin("livo-run") + " x.lcm --config c.yaml --out o";
+  for (const auto& [args, message] : std::vector<std::pair<std::string, std::string>>{
+           {" --max-frames 5x", "--max-frames: expected a non-negative integer, got '5x'"},
+           {" --max-frames abc", "--max-frames: expected a non-negative integer, got 'abc'"},
+           {" --max-frames -3", "--max-frames: expected a non-negative integer, got '-3'"},
+           {" --visual-mode foo", "--visual-mode: expected one of adaptive|all|off, got 'foo'"},
+           {" --map-mode local", "--map-mode: expected one of hybrid|global, got 'local'"},
+           {" --bogus", "unknown option '--bogus'"},
+           {" --max-frames", "--max-frames: missing value (N)"},
+           {" --quiet=1", "--quiet: takes no value, got '1'"},
+           {" y.lcm", "unexpected argument 'y.lcm'"}}) {
+    const livo::test::Ran r = livo::test::runSplit(base + args, dir);
+    EXPECT_EQ(r.rc, 2) << args;
+    EXPECT_EQ(r.err, "livo-run: " + message + "\n" + hint) << args;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+  livo::test::Ran r = livo::test::runSplit(bin("livo-run") + " --config c.yaml --out o", dir);
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err, "livo-run: missing argument LOG.lcm (unless --print-config)\n" + hint);
+  r = livo::test::runSplit(bin("livo-run") + " x.lcm --out o", dir);
+  EXPECT_EQ(r.err, "livo-run: --config is required\n" + hint);
+  r = livo::test::runSplit(bin("livo-run") + " x.lcm --config c.yaml", dir);
+  EXPECT_EQ(r.err, "livo-run: --out is required (unless --print-config)\n" + hint);
+  r = livo::test::runSplit(base, dir);  // a good command line, a missing config: a configuration error
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err, "livo-run: c.yaml: cannot open config file\n");
+
+  r = livo::test::runSplit(bin("livo-run") + " --max-frames 5x --help", dir);
+  EXPECT_EQ(r.rc, 0);
+  for (const char* s : {"usage: livo-run [LOG.lcm] --config CFG.yaml [--out DIR] [options]", "--visual-mode adaptive|all|off",
+                        "[default: adaptive]", "--map-mode hybrid|global", "[default: hybrid]", "--max-frames N",
+                        "[default: all]", "--no-maps", "--print-config", "--version",
+                        "exit status: 0 ok, 1 run-time error, 2 usage or configuration error"})
+    EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+  r = livo::test::runSplit(bin("livo-run") + " --version", dir);
+  EXPECT_EQ(r.rc, 0);
+  EXPECT_EQ(r.out, std::string("livo-run ") + livo::projectVersion() + "\n");
+  fs::remove_all(dir);
+}
+
+TEST(LivoRun, PrintedConfigGivesTheSameTrajectory) {
+  // livo-run LOG --config R and livo-run LOG --config R2, R2 = livo-run --config R --print-config: the
+  // same trajectory.tum byte for byte; R2 printed again is R2 (a fixed point). R is the simulator's rig
+  // with two keys removed, so that R2 holds defaults the modules filled in: tau_translation_m from
+  // `environment`, camera.pixel_noise (read by the camera model and by the photometric update).
+  for (const char* b : {"livo-sim", "livo-run"})
+    if (!fs::exists(bin(b))) LIVO_SKIP() << bin(b) << " not built";
+  const fs::path dir = fs::temp_directory_path() / ("livo_test_print_config_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string log = (dir / "demo.lcm").string(), rig = (dir / "rig.yaml").string();
+  ASSERT_EQ(run(bin("livo-sim") + " --scenario " + LIVO_SOURCE_DIR + "/config/sim/demo.yaml --out " + log + " --gt " +
+                (dir / "gt.tum").string() + " --rig " + rig + " --duration 4 --quiet"),
+            0);
+  std::string r = slurp(rig);
+  for (const std::string key : {"tau_translation_m", "pixel_noise"}) {  // drop the line of each key
+    const std::size_t at = r.find("  " + key + ":");
+    ASSERT_NE(at, std::string::npos) << key;
+    r.erase(at, r.find('\n', at) + 1 - at);
+  }
+  const std::string r1 = (dir / "r1.yaml").string(), r2 = (dir / "r2.yaml").string();
+  std::ofstream(r1) << r;
+  for (const std::string modes : {"", " --visual-mode all --map-mode global"}) {
+    SCOPED_TRACE(modes);
+    const std::string run_a = bin("livo-run") + " " + log + " --config " + r1 + modes + " --no-maps --quiet --out ";
+    ASSERT_EQ(run(run_a + (dir / "a").string()), 0);
+    livo::test::Ran printed = livo::test::runSplit(bin("livo-run") + " --config " + r1 + modes + " --print-config", dir);
+    ASSERT_EQ(printed.rc, 0) << printed.err;
+    EXPECT_NE(printed.out.find("  tau_translation_m: "), std::string::npos) << printed.out;
+    EXPECT_NE(printed.out.find("# Command-line settings, not config keys: --visual-mode " +
+                               std::string(modes.empty() ? "adaptive --map-mode hybrid" : "all --map-mode global")),
+              std::string::npos)
+        << printed.out;
+    std::ofstream(r2) << printed.out;
+    ASSERT_EQ(run(bin("livo-run") + " " + log + " --config " + r2 + modes + " --no-maps --quiet --out " +
+                  (dir / "b").string()),
+              0);
+    const std::string a = slurp(dir / "a" / "trajectory.tum"), b = slurp(dir / "b" / "trajectory.tum");
+    EXPECT_GT(std::count(a.begin(), a.end(), '\n'), 20);
+    EXPECT_TRUE(a == b) << "the printed configuration changed the trajectory";
+    EXPECT_EQ(livo::test::runSplit(bin("livo-run") + " --config " + r2 + modes + " --print-config", dir).out, printed.out);
+  }
   fs::remove_all(dir);
 }

@@ -3,6 +3,8 @@
 // network): frames at the image times with their sweeps and IMU, bad messages counted, LiDAR-only mode.
 // The exporter's core: test_process_exporter.cpp; the binaries and run-local: test_process_system.cpp.
 #include "livo/common/timing.hpp"
+#include "livo/estimation/pipeline.hpp"
+#include "livo/io/channels.hpp"
 #include "livo/process/cli.hpp"
 #include "livo/process/lcm_node.hpp"
 #include "livo/process/preprocess_node.hpp"
@@ -114,42 +116,78 @@ TEST(LcmNode, UnusableUrlIsAnErrorNamingIt) {
 
 TEST(CommandLine, ParsesCommonOptionsAndNamesTheBadFlag) {
   auto parse = [](std::vector<const char*> argv, ProcessArgs& a, std::string* out = nullptr) {
-    CommandLine cl("livo-x", "--config CFG", "test");
+    CommandLine cl("livo-x", "test");
     addProcessOptions(cl, a);
-    if (out) cl.option("--out", out, "DIR", "output");
+    if (out) cl.text("--out", out, "DIR", "output");
     argv.insert(argv.begin(), "livo-x");
-    return cl.parse(int(argv.size()), argv.data());
+    std::ostringstream os;
+    return cl.parse(int(argv.size()), argv.data(), os) == CommandLine::Outcome::kRun;
   };
   ProcessArgs a;
   std::string out;
-  EXPECT_TRUE(parse({"--config", "c.yaml", "--lcm-url=memq://", "--idle-exit", "2.5", "--out", "d"}, a, &out));
+  EXPECT_TRUE(parse({"--config", "c.yaml", "--lcm-url=memq://", "--idle-exit", "2.5", "--out", "d", "--print-config"},
+                    a, &out));
   EXPECT_EQ(a.config, "c.yaml");
   EXPECT_EQ(a.lcm_url, "memq://");
   EXPECT_DOUBLE_EQ(a.idle_exit_s, 2.5);
+  EXPECT_TRUE(a.print_config);
   EXPECT_EQ(out, "d");
 
   auto error = [&](std::vector<const char*> argv) -> std::string {
     ProcessArgs b;
     try {
       parse(argv, b);
-    } catch (const CliError& e) {
+    } catch (const UsageError& e) {
       return e.what();
     }
     return "";
   };
   EXPECT_EQ(error({"--lcm-url", "x"}), "--config is required");
-  EXPECT_EQ(error({"--config", "c", "--bogus"}), "unknown option --bogus");
-  EXPECT_EQ(error({"--config"}), "--config needs a value (CFG.yaml)");
+  EXPECT_EQ(error({"--config", "c", "--bogus"}), "unknown option '--bogus'");
+  EXPECT_EQ(error({"--config"}), "--config: missing value (CFG.yaml)");
   EXPECT_EQ(error({"--config", "c", "--idle-exit", "soon"}), "--idle-exit: expected a number >= 0, got 'soon'");
   EXPECT_EQ(error({"--config", "c", "--idle-exit", "-1"}), "--idle-exit: expected a number >= 0, got '-1'");
   EXPECT_EQ(error({"--config", "c", "stray"}), "unexpected argument 'stray'");
 
-  testing::internal::CaptureStdout();
   ProcessArgs h;
-  EXPECT_FALSE(parse({"--help"}, h));
-  const std::string help = testing::internal::GetCapturedStdout();
+  CommandLine cl("livo-x", "test");
+  addProcessOptions(cl, h);
+  const std::string help = cl.help();
   EXPECT_NE(help.find("--lcm-url URL"), std::string::npos) << help;
   EXPECT_NE(help.find(kDefaultLcmUrl), std::string::npos) << help;
+  EXPECT_NE(help.find("--print-config"), std::string::npos) << help;
+  EXPECT_NE(help.find("[default: 0 s]"), std::string::npos) << help;
+}
+
+TEST(CommandLine, PrintConfigIsTheEffectiveConfigurationAndAFixedPoint) {
+  // Present keys keep their text, absent ones get the module's default (the selector's tau_translation_m
+  // from `environment`), command-line overrides replace the value; the output loads back to the same text.
+  const std::string yaml =
+      "environment: outdoor\n"
+      "lidar: {blind_m: 0.50, T_imu_lidar: [0, 0, 0, 0, 0, 0, 1], model: avia}\n"
+      "preprocess: {wait_timeout_s: 0.4}\n"
+      "channels: {frame: MY_FRAME}\n"
+      "exporter: {map_voxel_m: 0.2}\n";
+  auto print = [](const std::string& text) {
+    ConfigFile file = ConfigFile::parse(text, "rig.yaml");
+    PipelineConfig pipe;
+    pipe.load(file.root());
+    ChannelConfig ch;
+    ch.load(file.root().section("channels"));
+    file.overrideEffective("map.memory_cap_mb", 64.0);
+    std::ostringstream os;
+    printConfig(os, "livo-x", file, "--visual-mode all");
+    return std::make_pair(os.str(), pipe);
+  };
+  const auto [printed, pipe] = print(yaml);
+  for (const char* s : {"# Effective configuration of livo-x", "# Command-line settings, not config keys: --visual-mode all",
+                        "environment: outdoor", "  blind_m: 0.50\n", "  wait_timeout_s: 0.4\n", "  frame: MY_FRAME\n",
+                        "  tau_translation_m: 2\n", "  memory_cap_mb: 64\n", "  imu: LIVO_IMU\n"})
+    EXPECT_NE(printed.find(s), std::string::npos) << s << "\n" << printed;
+  EXPECT_EQ(printed.find("exporter"), std::string::npos) << "a section nobody read is not printed";
+  EXPECT_EQ(print(printed).first, printed);
+  EXPECT_EQ(print(printed).second.selector.tau_translation_m, pipe.selector.tau_translation_m);
+  EXPECT_EQ(print(printed).second.preprocess.wait_timeout_s, pipe.preprocess.wait_timeout_s);
 }
 
 TEST(CommandLine, UnknownKeysInTheProcesssOwnSectionsAreErrors) {

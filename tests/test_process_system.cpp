@@ -1,8 +1,10 @@
 // The process suite as processes: the built livo-preprocess and livo-exporter binaries fed by
 // lcm-logplayer inside a private network namespace (no traffic leaves its loopback device; skipped when
 // not root or without `ip netns`), their command-line errors, and procman/run-local (starts a group of
-// a .pmd, restarts a killed command, stops everything on SIGTERM; resolves livo.pmd's commands).
-// livo-test-bins: livo-preprocess livo-exporter
+// a .pmd, restarts a killed command, stops everything on SIGTERM; resolves livo.pmd's commands), and the
+// command line every process shares (--help, --version, exit codes, --print-config).
+// livo-test-bins: livo-preprocess livo-exporter livo-estimator livo-mapserver
+#include "livo/cli/command_line.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/log.hpp"
@@ -89,6 +91,87 @@ TEST(ProcessBinaries, HelpAndErrorsNameTheProblem) {
   std::tie(rc, out) = run(kBin + "/livo-preprocess --config " + dir + "/bad.yaml --lcm-url 'bogus://'");
   EXPECT_EQ(rc, 1);
   EXPECT_NE(out.find("cannot open LCM URL 'bogus://'"), std::string::npos) << out;
+}
+
+namespace {
+
+struct Ran {
+  int rc = -1;
+  std::string out, err;
+};
+
+/// Runs `cmd` with stdout and stderr into files of `dir`.
+Ran runSplit(const std::string& dir, const std::string& cmd) {
+  const int rc = std::system((cmd + " > " + dir + "/stdout.txt 2> " + dir + "/stderr.txt").c_str());
+  return {WIFEXITED(rc) ? WEXITSTATUS(rc) : -1, readFile(dir + "/stdout.txt"), readFile(dir + "/stderr.txt")};
+}
+
+const char* const kProcesses[] = {"livo-preprocess", "livo-estimator", "livo-mapserver", "livo-exporter"};
+
+}  // namespace
+
+TEST(ProcessBinaries, HelpVersionAndUsageErrorsShareOneCommandLine) {
+  const std::string dir = tempDir("cli_common");
+  for (const std::string p : kProcesses) {
+    SCOPED_TRACE(p);
+    Ran r = runSplit(dir, kBin + "/" + p + " --help");
+    EXPECT_EQ(r.rc, 0);
+    for (const char* s : {"usage: ", "--config CFG.yaml", "--print-config", "--version", "[default: 0 s]",
+                          "exit status: 0 ok, 1 run-time error, 2 usage or configuration error"})
+      EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
+    r = runSplit(dir, kBin + "/" + p + " --version");
+    EXPECT_EQ(r.rc, 0);
+    EXPECT_EQ(r.out, p + " " + livo::projectVersion() + "\n");
+    r = runSplit(dir, kBin + "/" + p + " --config x.yaml --idle-exit 5x");
+    EXPECT_EQ(r.rc, 2);
+    EXPECT_EQ(r.err, p + ": --idle-exit: expected a number >= 0, got '5x'\ntry '" + p + " --help'\n");
+    EXPECT_TRUE(r.out.empty()) << r.out;
+    r = runSplit(dir, kBin + "/" + p + " --config x.yaml --bogus");
+    EXPECT_EQ(r.rc, 2);
+    EXPECT_EQ(r.err, p + ": unknown option '--bogus'\ntry '" + p + " --help'\n");
+    r = runSplit(dir, kBin + "/" + p + " --config " + dir + "/missing.yaml --print-config");
+    EXPECT_EQ(r.rc, 2);
+    EXPECT_NE(r.err.find("missing.yaml: cannot open config file"), std::string::npos) << r.err;
+  }
+  Ran r = runSplit(dir, kBin + "/livo-estimator --config x.yaml --visual-mode sometimes");
+  EXPECT_EQ(r.rc, 2);
+  EXPECT_EQ(r.err.substr(0, r.err.find('\n')),
+            "livo-estimator: --visual-mode: expected one of adaptive|all|off, got 'sometimes'");
+}
+
+TEST(ProcessBinaries, PrintConfigLoadsBackAndIsAFixedPoint) {
+  // Every shipped rig config: the printed configuration is YAML that each process accepts as its config,
+  // and printing the printed file gives the same text again (same keys, same values, same defaults).
+  const std::string dir = tempDir("print_config");
+  std::vector<std::string> configs;
+  for (const auto& e : fs::directory_iterator(std::string(LIVO_SOURCE_DIR) + "/config"))
+    if (e.path().extension() == ".yaml") configs.push_back(e.path().string());
+  ASSERT_GE(configs.size(), 5u);
+  for (const std::string p : kProcesses) {
+    for (const std::string& cfg : configs) {
+      SCOPED_TRACE(p + " " + cfg);
+      const std::string extra = p == "livo-estimator" ? " --visual-mode all" : "";
+      const Ran first = runSplit(dir, kBin + "/" + p + " --config " + cfg + extra + " --print-config");
+      ASSERT_EQ(first.rc, 0) << first.err;
+      EXPECT_EQ(first.out.rfind("# Effective configuration of " + p, 0), 0u) << first.out;
+      EXPECT_NE(first.out.find("channels:\n"), std::string::npos) << first.out;
+      std::ofstream(dir + "/printed.yaml") << first.out;
+      const Ran again = runSplit(dir, kBin + "/" + p + " --config " + dir + "/printed.yaml" + extra + " --print-config");
+      ASSERT_EQ(again.rc, 0) << again.err;
+      EXPECT_EQ(again.out, first.out);
+    }
+  }
+  const std::string avia = std::string(LIVO_SOURCE_DIR) + "/config/avia.yaml";
+  Ran r = runSplit(dir, kBin + "/livo-estimator --config " + avia + " --visual-mode off --print-config");
+  EXPECT_NE(r.out.find("# Command-line settings, not config keys: --visual-mode off\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nestimator:\n  map_timeout_ms: 250.0\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  tau_translation_m: "), std::string::npos) << "a default filled in\n" << r.out;
+  r = runSplit(dir, kBin + "/livo-mapserver --config " + avia + " --memory-cap-mb 12.5 --print-config");
+  EXPECT_NE(r.out.find("  memory_cap_mb: 12.5\n"), std::string::npos) << "the command line overrides the key\n" << r.out;
+  r = runSplit(dir, kBin + "/livo-exporter --config " + avia + " --print-config");  // --out is not needed
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_NE(r.out.find("exporter:\n"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("estimator:"), std::string::npos) << "only the keys the exporter reads\n" << r.out;
 }
 
 // ---------------------------------------------------------------- processes in a network namespace

@@ -1,33 +1,16 @@
 // Pieces of the livo-convert command line shared by its source files.
 #pragma once
 
+#include "livo/cli/command_line.hpp"
 #include "livo/datasets/rosbag.hpp"
 
 #include <unistd.h>
 
-#include <cerrno>
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
-#include <stdexcept>
 #include <string>
-#include <vector>
 
 namespace livo_convert {
-
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-inline double parseNumber(const std::string& flag, const std::string& s) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s.c_str(), &end);
-  if (s.empty() || end != s.c_str() + s.size() || !std::isfinite(v) || errno == ERANGE)
-    throw UsageError(flag + ": expected a number, got '" + s + "'");
-  return v;
-}
 
 /// Progress on stderr: one line rewritten in place on a terminal, a line per 25 % otherwise.
 class Progress {
@@ -50,8 +33,19 @@ class Progress {
   int last_ = -1;
 };
 
-/// Parses the rosbag-only option args[i] (and its value, advancing i); false when it is not one.
-bool parseRosbagOption(const std::vector<std::string>& args, std::size_t& i, livo::RosbagOptions& opt);
+/// What every format takes.
+struct CommonArgs {
+  std::string in;  ///< DIR or BAG
+  std::string out;
+  bool quiet = false;
+};
+
+/// The positional input and --out / --quiet of one format's command line.
+void addCommonOptions(livo::CommandLine& cl, CommonArgs& a, const std::string& input_metavar,
+                      const std::string& input_help);
+
+/// Registers the `rosbag` command's options on `cl`, filling `opt`.
+void addRosbagOptions(livo::CommandLine& cl, livo::RosbagOptions& opt);
 
 /// Runs the bag conversion, prints the summary; returns the exit code.
 int runRosbag(const std::string& bag, const std::string& out, livo::RosbagOptions opt, bool quiet);

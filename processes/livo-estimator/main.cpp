@@ -1,5 +1,5 @@
 // livo-estimator --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--visual-mode adaptive|all|off]
-//                [--report-interval S]
+//                [--report-interval S] [--print-config]
 //
 // LIVO_FRAME in; per frame a LIVO_MAP_QUERY to livo-mapserver and its LIVO_SUBMAP back, then
 // LIVO_MAP_UPDATE, LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and LIVO_ESTIMATOR_STATS out (libs/process
@@ -20,7 +20,6 @@ using namespace livo;
 int main(int argc, char** argv) {
   installStopHandlers();
   CommandLine cl("livo-estimator",
-                 "--config CFG.yaml [--lcm-url URL] [--idle-exit S] [--visual-mode M] [--report-interval S]",
                  "Runs the odometry on LIVO_FRAME messages with the map in livo-mapserver (LIVO_MAP_QUERY /\n"
                  "LIVO_SUBMAP / LIVO_MAP_UPDATE) and publishes LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and\n"
                  "LIVO_ESTIMATOR_STATS. Stops on SIGINT / SIGTERM with a summary.");
@@ -28,15 +27,11 @@ int main(int argc, char** argv) {
   std::string visual_mode = "adaptive";
   double report_interval_s = 5.0;
   addProcessOptions(cl, args);
-  cl.option("--visual-mode", &visual_mode, "M", "adaptive (default) | all | off");
-  cl.option("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)");
-  try {
-    if (!cl.parse(argc, argv)) return 0;
-    parseVisualMode(visual_mode);
-  } catch (const std::exception& e) {
-    std::cerr << "livo-estimator: " << e.what() << " (--help for usage)\n";
-    return 2;
-  }
+  cl.choice("--visual-mode", &visual_mode, {"adaptive", "all", "off"},
+            "adaptive: keyframes, every frame while LiDAR is degenerate; all: every image; off: LiDAR-inertial");
+  cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
+      .unit("s");
+  if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
   PipelineConfig pipe_cfg;
   EstimatorNodeConfig node_cfg;
@@ -48,10 +43,14 @@ int main(int argc, char** argv) {
     node_cfg.load(root.section("estimator"));
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "estimator", "lio", "vio", "selector"});
-    pipe_cfg.visual_mode = visual_mode;
+    pipe_cfg.visual_mode = visual_mode;  // a command-line setting: PipelineConfig has no key for it
+    if (args.print_config) {
+      printConfig(std::cout, cl.program(), file, "--visual-mode " + visual_mode);
+      return kExitOk;
+    }
   } catch (const std::exception& e) {
     std::cerr << "livo-estimator: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
 
   try {
@@ -79,7 +78,7 @@ int main(int argc, char** argv) {
     std::cout << node.summary();
   } catch (const std::exception& e) {
     std::cerr << "livo-estimator: error: " << e.what() << "\n";
-    return 1;
+    return kExitRunError;
   }
-  return 0;
+  return kExitOk;
 }

@@ -1,4 +1,4 @@
-// livo-exporter --config CFG.yaml --out DIR [--lcm-url URL] [--idle-exit S]
+// livo-exporter --config CFG.yaml --out DIR [--lcm-url URL] [--idle-exit S] [--print-config]
 //
 // Writes the output directory of a multi-process run, in livo-run's formats: trajectory.tum and
 // frames.csv as the frames arrive (flushed per line), and on SIGINT / SIGTERM (or --idle-exit)
@@ -18,20 +18,15 @@ using namespace livo;
 
 int main(int argc, char** argv) {
   installStopHandlers();
-  CommandLine cl("livo-exporter", "--config CFG.yaml --out DIR [--lcm-url URL] [--idle-exit S]",
+  CommandLine cl("livo-exporter",
                  "Writes trajectory.tum, frames.csv, stats.json, map.pcd and map.bt into DIR from LIVO_ODOMETRY,\n"
                  "LIVO_ESTIMATOR_STATS, LIVO_REGISTERED_SCAN and LIVO_MAP_STATS. Stops on SIGINT / SIGTERM.");
   ProcessArgs args;
   std::string out;
   addProcessOptions(cl, args);
-  cl.option("--out", &out, "DIR", "output directory (created; existing files are replaced)");
-  cl.require("--out");
-  try {
-    if (!cl.parse(argc, argv)) return 0;
-  } catch (const CliError& e) {
-    std::cerr << "livo-exporter: " << e.what() << " (--help for usage)\n";
-    return 2;
-  }
+  cl.text("--out", &out, "DIR", "output directory (created; existing files are replaced)")
+      .requiredUnless("--print-config");
+  if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
   MapExportConfig cfg;
   ChannelConfig channels;
@@ -41,9 +36,13 @@ int main(int argc, char** argv) {
     cfg.load(root.section("exporter"));
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "exporter"});
+    if (args.print_config) {
+      printConfig(std::cout, cl.program(), file);
+      return kExitOk;
+    }
   } catch (const std::exception& e) {
     std::cerr << "livo-exporter: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
 
   try {
@@ -61,7 +60,7 @@ int main(int argc, char** argv) {
     std::cout << node.summary();
   } catch (const std::exception& e) {
     std::cerr << "livo-exporter: error: " << e.what() << "\n";
-    return 1;
+    return kExitRunError;
   }
-  return 0;
+  return kExitOk;
 }

@@ -1,5 +1,5 @@
 // livo-mapserver --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--map-mode hybrid|global]
-//                [--memory-cap-mb N] [--map-file FILE] [--report-interval S]
+//                [--memory-cap-mb N] [--map-file FILE] [--report-interval S] [--print-config]
 //
 // Owns the map (local voxel plane map + visual maps; hybrid: sliding local cube and long-term visual
 // map, memory cap): answers LIVO_MAP_QUERY with LIVO_SUBMAP, applies LIVO_MAP_UPDATE, publishes
@@ -23,8 +23,6 @@ using namespace livo;
 int main(int argc, char** argv) {
   installStopHandlers();
   CommandLine cl("livo-mapserver",
-                 "--config CFG.yaml [--lcm-url URL] [--idle-exit S] [--map-mode M] [--memory-cap-mb N] "
-                 "[--map-file FILE] [--report-interval S]",
                  "Serves the map to livo-estimator (LIVO_MAP_QUERY -> LIVO_SUBMAP, LIVO_MAP_UPDATE) and publishes\n"
                  "LIVO_MAP_STATS at 1 Hz. Stops on SIGINT / SIGTERM with a summary (saving --map-file).");
   ProcessArgs args;
@@ -33,17 +31,15 @@ int main(int argc, char** argv) {
   double cap_mb = -1.0;
   double report_interval_s = 10.0;
   addProcessOptions(cl, args);
-  cl.option("--map-mode", &map_mode, "M", "hybrid (default) | global (one unbounded map, FAST-LIVO2)");
-  cl.option("--memory-cap-mb", &cap_mb, "N", "memory cap of the map in MiB (0: none; default: config map.memory_cap_mb)");
-  cl.option("--map-file", &map_file, "FILE", "load the map from FILE at start (when it exists), save it there at exit");
-  cl.option("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)");
-  try {
-    if (!cl.parse(argc, argv)) return 0;
-    parseMapMode(map_mode);
-  } catch (const std::exception& e) {
-    std::cerr << "livo-mapserver: " << e.what() << " (--help for usage)\n";
-    return 2;
-  }
+  cl.choice("--map-mode", &map_mode, {"hybrid", "global"},
+            "hybrid: sliding local map + long-term visual map; global: one unbounded map (FAST-LIVO2)");
+  cl.number("--memory-cap-mb", &cap_mb, "N", "memory cap of the map (0: none; overrides map.memory_cap_mb)", 0.0)
+      .unit("MiB")
+      .defaultText("config map.memory_cap_mb");
+  cl.text("--map-file", &map_file, "FILE", "load the map from FILE at start (when it exists), save it there at exit");
+  cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
+      .unit("s");
+  if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
   PipelineConfig pipe_cfg;
   ChannelConfig channels;
@@ -53,9 +49,14 @@ int main(int argc, char** argv) {
     pipe_cfg.load(root);
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "map", "voxel_map"});
+    if (args.print_config) {
+      if (cap_mb >= 0) file.overrideEffective("map.memory_cap_mb", cap_mb);
+      printConfig(std::cout, cl.program(), file, "--map-mode " + map_mode);
+      return kExitOk;
+    }
   } catch (const std::exception& e) {
     std::cerr << "livo-mapserver: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
 
   try {
@@ -95,7 +96,7 @@ int main(int argc, char** argv) {
     std::cout << node.summary();
   } catch (const std::exception& e) {
     std::cerr << "livo-mapserver: error: " << e.what() << "\n";
-    return 1;
+    return kExitRunError;
   }
-  return 0;
+  return kExitOk;
 }

@@ -1,4 +1,4 @@
-// livo-preprocess --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--report-interval S]
+// livo-preprocess --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--report-interval S] [--print-config]
 //
 // Raw sensor messages (LIVO_IMU, LIVO_LIDAR, LIVO_CAMERA) in, estimator frames (LIVO_FRAME) out:
 // the LiDAR stream recut at the image times with the IMU samples covering each sweep and the gray
@@ -20,19 +20,15 @@ using namespace livo;
 
 int main(int argc, char** argv) {
   installStopHandlers();
-  CommandLine cl("livo-preprocess", "--config CFG.yaml [--lcm-url URL] [--idle-exit S] [--report-interval S]",
+  CommandLine cl("livo-preprocess",
                  "Recuts raw LIVO_IMU / LIVO_LIDAR / LIVO_CAMERA into LIVO_FRAME messages (channel names from\n"
                  "the config's `channels` section). Stops on SIGINT / SIGTERM with a summary.");
   ProcessArgs args;
   double report_interval_s = 5.0;
   addProcessOptions(cl, args);
-  cl.option("--report-interval", &report_interval_s, "S", "counters on stderr every S s of message time (0: off)");
-  try {
-    if (!cl.parse(argc, argv)) return 0;
-  } catch (const CliError& e) {
-    std::cerr << "livo-preprocess: " << e.what() << " (--help for usage)\n";
-    return 2;
-  }
+  cl.number("--report-interval", &report_interval_s, "S", "counters on stderr every S s of message time (0: off)", 0.0)
+      .unit("s");
+  if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
   PreprocessConfig cfg;
   ChannelConfig channels;
@@ -42,9 +38,13 @@ int main(int argc, char** argv) {
     cfg.load(root);
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "preprocess"});
+    if (args.print_config) {
+      printConfig(std::cout, cl.program(), file);
+      return kExitOk;
+    }
   } catch (const std::exception& e) {
     std::cerr << "livo-preprocess: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
 
   try {
@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
     std::cout << node.summary();
   } catch (const std::exception& e) {
     std::cerr << "livo-preprocess: error: " << e.what() << "\n";
-    return 1;
+    return kExitRunError;
   }
-  return 0;
+  return kExitOk;
 }

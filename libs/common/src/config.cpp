@@ -2,8 +2,10 @@
 
 #include "livo/common/so3.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace livo {
@@ -13,9 +15,55 @@ struct ConfigFile::State {
   YAML::Node root;
   std::set<std::string> leaves;    // dotted keys read as values
   std::set<std::string> sections;  // dotted keys opened as sections
+  // The effective configuration: per dotted key read, the file's node or the default, in reading order.
+  std::vector<std::string> effective_order;
+  std::map<std::string, YAML::Node> effective;
 };
 
 namespace {
+
+/// Shortest decimal text that reads back as the same double (std::to_chars round-trip guarantee).
+std::string exactNumber(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+YAML::Node numberNode(double v) { return YAML::Node(exactNumber(v)); }
+
+template <class It, class F>
+YAML::Node flowList(It begin, It end, F toNode) {
+  YAML::Node n(YAML::NodeType::Sequence);
+  for (It it = begin; it != end; ++it) n.push_back(toNode(*it));
+  n.SetStyle(YAML::EmitterStyle::Flow);
+  return n;
+}
+
+/// The effective values as a tree of maps in reading order (dotted keys split at '.').
+struct EffectiveTree {
+  std::vector<std::pair<std::string, EffectiveTree>> children;
+  YAML::Node leaf;
+  bool is_leaf = false;
+
+  EffectiveTree& child(const std::string& name) {
+    for (auto& c : children)
+      if (c.first == name) return c.second;
+    children.emplace_back(name, EffectiveTree{});
+    return children.back().second;
+  }
+  void emit(YAML::Emitter& out) const {
+    if (is_leaf) {
+      out << leaf;
+      return;
+    }
+    out << YAML::BeginMap;
+    for (const auto& [name, c] : children) {
+      out << YAML::Key << name << YAML::Value;
+      c.emit(out);
+    }
+    out << YAML::EndMap;
+  }
+};
 
 std::string scalarText(const YAML::Node& n) {
   if (n.IsScalar()) return n.Scalar();
@@ -83,6 +131,31 @@ void ConfigFile::checkAllKeysUsed() const {
   }
 }
 
+std::string ConfigFile::effectiveYaml() const {
+  EffectiveTree root;
+  for (const std::string& key : state_->effective_order) {
+    EffectiveTree* t = &root;
+    for (std::size_t start = 0;;) {
+      const std::size_t dot = key.find('.', start);
+      t = &t->child(key.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+      if (dot == std::string::npos) break;
+      start = dot + 1;
+    }
+    t->leaf = state_->effective.at(key);
+    t->is_leaf = true;
+  }
+  if (root.children.empty()) return "{}\n";
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Block);
+  root.emit(out);
+  return std::string(out.c_str()) + "\n";
+}
+
+void ConfigFile::overrideEffective(const std::string& dotted_key, double value) {
+  if (!state_->effective.count(dotted_key)) state_->effective_order.push_back(dotted_key);
+  state_->effective[dotted_key] = numberNode(value);
+}
+
 bool ConfigNode::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
 
 YAML::Node ConfigNode::child(const std::string& key) const { return node_[key]; }
@@ -93,7 +166,50 @@ void ConfigNode::fail(const std::string& key, const std::string& what) const {
   throw ConfigError(state_->name + ": " + fullKey(key) + ": " + what);
 }
 
-void ConfigNode::markLeaf(const std::string& key) const { state_->leaves.insert(fullKey(key)); }
+void ConfigNode::markLeaf(const std::string& key) const {
+  state_->leaves.insert(fullKey(key));
+  recordEffective(key, YAML::Clone(child(key)));
+}
+
+void ConfigNode::recordEffective(const std::string& key, const YAML::Node& value) const {
+  const std::string full = fullKey(key);
+  if (state_->effective.emplace(full, value).second) state_->effective_order.push_back(full);
+}
+
+void ConfigNode::recordDefault(const std::string& key, double v) const { recordEffective(key, numberNode(v)); }
+// A float default is printed as its exact double value: reading that back and narrowing gives the same float.
+void ConfigNode::recordDefault(const std::string& key, float v) const { recordDefault(key, double(v)); }
+void ConfigNode::recordDefault(const std::string& key, int v) const {
+  recordEffective(key, YAML::Node(std::to_string(v)));
+}
+void ConfigNode::recordDefault(const std::string& key, std::int64_t v) const {
+  recordEffective(key, YAML::Node(std::to_string(v)));
+}
+void ConfigNode::recordDefault(const std::string& key, bool v) const {
+  recordEffective(key, YAML::Node(v ? "true" : "false"));
+}
+void ConfigNode::recordDefault(const std::string& key, const std::string& v) const {
+  recordEffective(key, YAML::Node(v));
+}
+void ConfigNode::recordDefault(const std::string& key, const std::vector<double>& v) const {
+  recordEffective(key, flowList(v.begin(), v.end(), numberNode));
+}
+void ConfigNode::recordDefault(const std::string& key, const std::vector<int>& v) const {
+  recordEffective(key, flowList(v.begin(), v.end(), [](int i) { return YAML::Node(std::to_string(i)); }));
+}
+void ConfigNode::recordDefault(const std::string& key, const std::vector<std::string>& v) const {
+  recordEffective(key, flowList(v.begin(), v.end(), [](const std::string& s) { return YAML::Node(s); }));
+}
+void ConfigNode::recordDefault(const std::string& key, const Eigen::Vector2d& v) const {
+  recordEffective(key, flowList(v.data(), v.data() + 2, numberNode));
+}
+void ConfigNode::recordDefault(const std::string& key, const Eigen::Vector3d& v) const {
+  recordEffective(key, flowList(v.data(), v.data() + 3, numberNode));
+}
+void ConfigNode::recordDefault(const std::string& key, const Eigen::Isometry3d& v) const {
+  const std::array<double, 7> a = poseToArray(v);
+  recordEffective(key, flowList(a.begin(), a.end(), numberNode));
+}
 
 ConfigNode ConfigNode::section(const std::string& key) const {
   state_->sections.insert(fullKey(key));

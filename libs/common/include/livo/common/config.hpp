@@ -5,6 +5,11 @@
 // names. After all modules have loaded, `ConfigFile::checkAllKeysUsed()` reports any key that no
 // module read (a typo must not silently fall back to a default). Errors name the file and the full
 // dotted key, e.g. "config/avia.yaml: lio.voxel_size: expected a number, got 'abc'".
+//
+// The file also records, per key a module reads, the value in effect: the file's YAML value when the
+// key is present, the module's default (`out` at the time of the read, so defaults that depend on
+// other keys are the ones applied) when it is absent. `effectiveYaml()` prints that tree: the
+// binaries' --print-config, which loads back as a config file giving the same behaviour.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -41,6 +46,13 @@ class ConfigFile {
   /// All keys that were never read (dotted paths), for warnings.
   std::vector<std::string> unusedKeys() const;
 
+  /// Every key read so far (ConfigNode::get / require), as YAML in reading order: the file's value where
+  /// the key is present, the default otherwise (numbers printed so that they read back exactly).
+  std::string effectiveYaml() const;
+  /// Sets the effective value of a dotted key, for a command-line option that overrides a config key
+  /// (livo-mapserver --memory-cap-mb: map.memory_cap_mb).
+  void overrideEffective(const std::string& dotted_key, double value);
+
  private:
   struct State;
   explicit ConfigFile(std::shared_ptr<State> s) : state_(std::move(s)) {}
@@ -54,10 +66,12 @@ class ConfigNode {
   /// True when the key exists (does not mark it read).
   bool has(const std::string& key) const;
 
-  /// Reads `key` into `out` if present; keeps `out` (the default) otherwise.
+  /// Reads `key` into `out` if present; keeps `out` (the default, recorded as the effective value)
+  /// otherwise.
   template <class T>
   const ConfigNode& get(const std::string& key, T& out) const {
     if (has(key)) readValue(key, out);
+    else recordDefault(key, out);
     return *this;
   }
   /// Reads `key` into `out`; throws ConfigError naming the key when it is missing.
@@ -88,6 +102,20 @@ class ConfigNode {
   std::string fullKey(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
   void markLeaf(const std::string& key) const;
   YAML::Node child(const std::string& key) const;
+  /// The effective value of an absent key (the first record of a key wins).
+  void recordEffective(const std::string& key, const YAML::Node& value) const;
+  void recordDefault(const std::string& key, double v) const;
+  void recordDefault(const std::string& key, float v) const;
+  void recordDefault(const std::string& key, int v) const;
+  void recordDefault(const std::string& key, std::int64_t v) const;
+  void recordDefault(const std::string& key, bool v) const;
+  void recordDefault(const std::string& key, const std::string& v) const;
+  void recordDefault(const std::string& key, const std::vector<double>& v) const;
+  void recordDefault(const std::string& key, const std::vector<int>& v) const;
+  void recordDefault(const std::string& key, const std::vector<std::string>& v) const;
+  void recordDefault(const std::string& key, const Eigen::Vector2d& v) const;
+  void recordDefault(const std::string& key, const Eigen::Vector3d& v) const;
+  void recordDefault(const std::string& key, const Eigen::Isometry3d& v) const;
 
   void readValue(const std::string& key, double& out) const;
   void readValue(const std::string& key, float& out) const;

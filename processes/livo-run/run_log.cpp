@@ -1,0 +1,267 @@
+#include "run_log.hpp"
+
+#include "livo/cli/command_line.hpp"
+#include "livo/common/timing.hpp"
+#include "livo/io/convert.hpp"
+#include "livo/io/image_convert.hpp"
+#include "livo/io/log.hpp"
+#include "livo/io/run_outputs.hpp"
+#include "livo/process/scan_colour.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+namespace livo_run {
+
+using namespace livo;
+
+namespace {
+
+using Counters = std::map<std::string, double>;
+
+// frames.csv map_bytes (0 before initialisation). Hybrid mode with a memory cap: the map's O(1) byte
+// estimate after its update, the value the cap is enforced on (the map recounts exactly every
+// map.recount_interval updates). Without a cap the map never recounts (its estimate would use default
+// bytes per item) and in global mode update() returns at once: an exact count (mapStats(), a walk of
+// every structure, its time proportional to the map: ~20 ms for the street scenario's ~60 MB local map)
+// every 10 frames (hybrid) or 50 frames (global), carried forward in between. Not part of the frame
+// timings.
+class MapBytes {
+ public:
+  explicit MapBytes(const Pipeline& pipeline)
+      : pipeline_(pipeline),
+        estimate_calibrated_(pipeline.map().mode() == MapMode::Hybrid && pipeline.map().config().capBytes() > 0),
+        exact_every_(pipeline.map().mode() == MapMode::Hybrid ? 10 : 50),
+        frames_since_count_(exact_every_) {}
+
+  std::uint64_t operator()(const FrameResult& r) {
+    if (!r.lio.initialized) return 0;
+    if (estimate_calibrated_) return r.map.bytes;
+    if (++frames_since_count_ >= exact_every_) {
+      counted_ = pipeline_.mapStats().bytes;
+      frames_since_count_ = 0;
+    }
+    return counted_;
+  }
+
+ private:
+  const Pipeline& pipeline_;
+  const bool estimate_calibrated_;
+  const std::size_t exact_every_;
+  std::size_t frames_since_count_;
+  std::uint64_t counted_ = 0;
+};
+
+/// What happens with each frame result: its points into map.pcd (camera gray where an image saw the
+/// point) and map.bt (OctoMap from the scan rays), its frames.csv / trajectory.tum row, the
+/// initialisation message, the --max-frames stop.
+class FrameSink {
+ public:
+  FrameSink(const Args& args, const Config& cfg, const Pipeline& pipeline, RunOutputs& outputs, Counters& counters)
+      : cloud(cfg.exporter), occupancy(cfg.exporter), args_(args), cfg_(cfg), pipeline_(pipeline),
+        outputs_(outputs), counters_(counters), map_bytes_(pipeline) {}
+
+  void operator()(const Frame& frame, const FrameResult& r) {
+    if (stop_) return;
+    if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
+    outputs_.addFrame(record(frame, r));
+    if (r.lio.initialized && !announced_init_ && !args_.quiet) {
+      std::cerr << "livo-run: " << pipeline_.odometry().initMessage() << "\n";
+      announced_init_ = true;
+    }
+    if (r.lidarFailed()) counters_["lio_failed_frames"] += 1;
+    if (args_.max_frames >= 0 && static_cast<std::int64_t>(outputs_.frames()) >= args_.max_frames) stop_ = true;
+  }
+  bool stopped() const { return stop_; }
+
+  MapCloud cloud;
+  OccupancyMap occupancy;
+
+ private:
+  void addToMaps(const Frame& frame, const FrameResult& r) {
+    const Pose T_world_imu = r.lio.state.pose();
+    const RegisteredScan scan =
+        colourScan(frame.utime, T_world_imu, r.lio.points, pipeline_.camera(), frame.has_image ? &frame.image : nullptr,
+                   cfg_.pipe.camera.T_imu_camera, cfg_.pipe.camera.scale);
+    cloud.add(scan.points, scan.intensity, scan.rgb);
+    occupancy.insertScan(T_world_imu * cfg_.pipe.lio.T_imu_lidar.translation(), scan.points);
+  }
+  FrameRecord record(const Frame& frame, const FrameResult& r) {
+    FrameRecord rec;
+    rec.utime = frame.utime;
+    rec.has_pose = r.lio.initialized;
+    rec.T_world_imu = r.lio.state.pose();
+    rec.lio_ms = r.lio.lio_ms;
+    rec.vio_ms = r.vio_ms;
+    rec.map_ms = r.lio.map_ms + r.map.ms;  // insertion + slides / evictions
+    rec.total_ms = r.total_ms;
+    rec.sigma_min = r.lio.sigma_min;
+    rec.degenerate = r.degenerate;
+    rec.visual_used = r.visual_used;
+    rec.n_points = r.lio.n_points;
+    rec.n_planes_matched = r.lio.n_matched;
+    rec.n_visual_points = r.n_visual_points;
+    rec.map_bytes = map_bytes_(r);
+    return rec;
+  }
+
+  const Args& args_;
+  const Config& cfg_;
+  const Pipeline& pipeline_;
+  RunOutputs& outputs_;
+  Counters& counters_;
+  MapBytes map_bytes_;
+  bool stop_ = false;
+  bool announced_init_ = false;
+};
+
+/// Decodes and validates one log event of a sensor channel and feeds it to the pipeline. False when it
+/// was not fed: another channel, the camera disabled, or a rejected message (counted).
+bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counters& counters, bool quiet) {
+  const MessageLimits limits{};
+  if (ev.channel == cfg.channels.imu) {
+    livo::imu_t m;
+    ImuSample s;
+    Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+    if (v) v = fromMsg(m, s);
+    if (!v) {
+      counters["rejected_imu"] += 1;
+      return false;
+    }
+    pipeline.addImu(s);
+  } else if (ev.channel == cfg.channels.lidar) {
+    livo::lidar_scan_t m;
+    LidarScan s;
+    std::size_t nonfinite = 0;
+    Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+    if (v) v = fromMsg(m, s, limits, &nonfinite);
+    if (!v) {
+      counters["rejected_scans"] += 1;
+      if (!quiet) std::cerr << "livo-run: dropped a scan: " << v.error << "\n";
+      return false;
+    }
+    counters["nonfinite_points"] += double(nonfinite);
+    pipeline.addScan(s);
+  } else if (ev.channel == cfg.channels.camera) {
+    if (!cfg.pipe.preprocess.camera_enabled) return false;
+    livo::image_t m;
+    Image img, gray;
+    std::string err;
+    Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
+    if (v) v = fromMsg(m, img, limits);
+    if (v && !toGray8(img, gray, &err)) v = Validation::fail(err);
+    if (!v) {
+      counters["rejected_images"] += 1;
+      if (!quiet) std::cerr << "livo-run: dropped an image: " << v.error << "\n";
+      return false;
+    }
+    pipeline.addImage(gray);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+/// Step 2, the replay: every event fed, every complete frame run, a progress line twice a second.
+/// Returns the log error that stopped it ("" at the end of the log or at --max-frames).
+std::string replay(const Args& args, const Config& cfg, LogReader& reader, Pipeline& pipeline, FrameSink& sink,
+                   const RunOutputs& outputs, Counters& counters) {
+  const auto runFrames = [&]() { pipeline.processReady([&](const Frame& f, const FrameResult& r) { sink(f, r); }); };
+  Stopwatch wall;
+  double last_progress = -1.0;
+  std::string log_error;
+  LogEvent ev;
+  try {
+    while (reader.next(ev)) {
+      if (!feedEvent(ev, cfg, pipeline, counters, args.quiet)) continue;
+      runFrames();
+      if (sink.stopped()) break;
+      const double secs = wall.elapsedMs() / 1000.0;
+      if (!args.quiet && secs - last_progress > 0.5) {
+        last_progress = secs;
+        std::fprintf(stderr, "\rlivo-run: %5.1f%% of log, %zu frames, %.1f frames/s   ",
+                     100.0 * double(reader.position()) / double(std::max<std::uint64_t>(1, reader.fileSize())),
+                     outputs.frames(), double(outputs.frames()) / std::max(1e-3, secs));
+      }
+    }
+    if (!sink.stopped()) {
+      pipeline.flush();
+      runFrames();
+    }
+  } catch (const LogError& e) {
+    log_error = e.what();  // keep everything processed so far; reported by the caller
+  }
+  if (!args.quiet) std::fprintf(stderr, "\n");
+  return log_error;
+}
+
+/// The recombiner's counters as preprocess_<name> and the map's as map_<name>.
+void addStatsCounters(const PreprocessStats& pst, const HybridMapCounters& mc, Counters& counters) {
+  for (const auto& [k, v] : std::map<std::string, std::uint64_t>{
+           {"frames", pst.frames}, {"empty_sweeps", pst.empty_sweeps}, {"images_used", pst.images_used},
+           {"images_dropped", pst.imagesDropped()}, {"imu_out_of_order", pst.imu_out_of_order},
+           {"imu_duplicates", pst.imu_duplicates}, {"imu_gaps", pst.imu_gaps},
+           {"scans_out_of_order", pst.scans_out_of_order}, {"points_in", pst.points_in},
+           {"points_nan", pst.points_nan}, {"points_emitted", pst.points_emitted},
+           {"scans_in", pst.scans_in}, {"scans_empty", pst.scans_empty}, {"imu_in", pst.imu_in},
+           {"images_in", pst.images_in}, {"images_invalid", pst.images_invalid},
+           {"buffer_overflow_drops", pst.bufferOverflowDrops()}})
+    counters["preprocess_" + k] = double(v);
+  for (const auto& [k, v] : std::map<std::string, double>{
+           {"slides", double(mc.slides)}, {"longterm_slides", double(mc.longterm_slides)},
+           {"removed_voxels", double(mc.removed_voxels)}, {"moved_to_longterm", double(mc.moved_to_longterm)},
+           {"moved_to_local", double(mc.moved_to_local)}, {"deleted_points", double(mc.deleted_points)},
+           {"eviction_events", double(mc.eviction_events)}, {"evicted_longterm_points", double(mc.evicted_longterm_points)},
+           {"evicted_local_voxels", double(mc.evicted_local_voxels)}, {"evicted_local_points", double(mc.evicted_local_points)},
+           {"max_update_ms", mc.max_update_ms}, {"max_slide_ms", mc.max_slide_ms}})
+    counters["map_" + k] = v;
+}
+
+/// Step 3, the outputs: map.pcd / map.bt, stats.json, the summary on stdout.
+int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, FrameSink& sink, RunOutputs& outputs,
+                 Counters& counters, const std::string& log_error) {
+  const PreprocessStats& pst = pipeline.recombiner().stats();
+  const HybridMapStats hs = pipeline.mapStats();
+  MapSummary ms;
+  ms.local_voxels = hs.local_voxels;
+  ms.visual_points_local = hs.visual_points_local;
+  ms.visual_points_longterm = hs.visual_points_longterm;
+  ms.bytes = hs.bytes;
+  if (!args.no_maps) {
+    sink.cloud.writePcd(args.out + "/map.pcd");
+    if (cfg.exporter.octomap_enabled) sink.occupancy.writeBt(args.out + "/map.bt");
+  }
+  counters["map_pcd_points"] = double(sink.cloud.size());
+  addStatsCounters(pst, hs.counters, counters);
+  counters["map_bt_scans_dropped"] = double(sink.occupancy.scansDropped());
+  counters["images_wrong_size"] = double(pipeline.imagesWrongSize());
+  const double rss = bytesToMb(peakRssBytes());
+  std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
+                                           {"log", args.log}, {"config", args.config}};
+  if (!log_error.empty()) notes["log_error"] = log_error;
+  outputs.writeStats(ms, rss, counters, notes);
+  std::cout << outputs.summary(rss);
+  if (!args.quiet) std::cout << "preprocessing:\n" << pst.summary() << "\n";
+  std::cout << "outputs in " << args.out << "\n";
+  if (!log_error.empty()) {
+    std::cerr << "livo-run: error: " << log_error << " (outputs up to this point were written)\n";
+    return kExitRunError;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int runLog(const Args& args, const Config& cfg) {
+  LogReader reader(args.log);
+  RunOutputs outputs(args.out);
+  Pipeline pipeline(cfg.pipe);
+  Counters counters;
+  FrameSink sink(args, cfg, pipeline, outputs, counters);
+  const std::string log_error = replay(args, cfg, reader, pipeline, sink, outputs, counters);
+  return writeOutputs(args, cfg, pipeline, sink, outputs, counters, log_error);
+}
+
+}  // namespace livo_run

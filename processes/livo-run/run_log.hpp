@@ -1,0 +1,38 @@
+// livo-run's run: the log replayed through one Pipeline, the outputs written (main.cpp: command line and
+// configuration).
+#pragma once
+
+#include "livo/estimation/pipeline.hpp"
+#include "livo/io/channels.hpp"
+#include "livo/process/map_export.hpp"
+
+#include <cstdint>
+#include <string>
+
+namespace livo_run {
+
+/// The command line (main.cpp registers it).
+struct Args {
+  std::string log, config, out;
+  std::string visual_mode = "adaptive";
+  std::string map_mode = "hybrid";
+  bool quiet = false;
+  bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)
+  std::int64_t max_frames = -1;
+  bool print_config = false;
+};
+
+/// Everything the run reads from the config file (plus the command-line modes in `pipe`).
+struct Config {
+  livo::PipelineConfig pipe;
+  livo::ChannelConfig channels;
+  livo::MapExportConfig exporter;
+};
+
+/// Replays args.log through the pipeline and writes args.out (trajectory.tum, frames.csv, stats.json,
+/// map.pcd, map.bt), a progress line on stderr and a summary on stdout. Returns kExitOk, or kExitRunError
+/// after writing what was processed when the log is truncated or corrupt; throws on other run-time
+/// errors (missing log, unwritable output directory).
+int runLog(const Args& args, const Config& cfg);
+
+}  // namespace livo_run
