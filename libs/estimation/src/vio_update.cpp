@@ -178,20 +178,14 @@ Linearization linearize(const NavState& x, const Image& gray, const CameraModel&
   return lin;
 }
 
-}  // namespace
-
-VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
-                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg) {
-  VioUpdateResult res;
-  res.point_rms.assign(points.size(), -1.0);
-  res.point_px.assign(points.size(), Vec2::Zero());
-  const NavState x_prop = x;
-  const StateCov P_prop = P;
+/// Step 1. Per point: warp from the plane normal and the outlier gate at level 0 at the prior.
+/// Returns the squared RMS summed over the points used.
+double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
+                  const std::vector<VisualPoint*>& points, const VioConfig& cfg, std::vector<PointState>& pts,
+                  VioUpdateResult& res) {
   const Pose T_world_camera = x.pose() * T_imu_camera;
-
-  // 1. Per point: warp from the plane normal, and the outlier gate at level 0 at the prior.
-  std::vector<PointState> pts(points.size());
-  double sq_before = 0;
+  pts.assign(points.size(), PointState{});
+  double sq = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
     PointState& ps = pts[i];
     ps.point = points[i];
@@ -205,19 +199,24 @@ VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const 
     ps.used = rms >= 0 && rms <= cfg.outlier_rms;
     if (ps.used) {
       ++res.points_used;
-      sq_before += rms * rms;
+      sq += rms * rms;
     } else {
       ++res.points_rejected;
     }
   }
-  if (res.points_used == 0) return res;
-  res.rms_before = std::sqrt(sq_before / res.points_used);
+  return sq;
+}
 
-  // 2. Coarse to fine: iterated updates per level, information form over [dtheta, dp, dtau] (the
-  //    first 7 error-state entries), rolling back an iteration that raises the mean squared error.
+/// Step 2. Coarse to fine: iterated updates per level, information form over [dtheta, dp, dtau] (the
+/// first 7 error-state entries), rolling back an iteration that raises the mean squared error.
+/// Returns false when no iteration linearised anything (P stays the prior); else `K_bar` is the
+/// posterior covariance of the last linearisation.
+bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const CameraModel& cam,
+                   const Pose& T_imu_camera, const std::vector<PointState>& pts, const VioConfig& cfg,
+                   StateCov& K_bar, VioUpdateResult& res) {
+  const NavState x_prop = x;
   const double inv_var = 1.0 / cfg.residualVariance();
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
-  StateCov K_bar = P_prop;
   bool have_K = false;
   const double conv_rot = cfg.converge_rot_deg * M_PI / 180.0;
   for (int level = PatchPyramid::kLevels - 1; level >= 0; --level) {
@@ -248,10 +247,12 @@ VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const 
         break;
     }
   }
-  // 3. Covariance once, from the last linearisation: P = (I - K_bar H^T R^-1 H) P_prop = K_bar.
-  if (have_K) P = 0.5 * (K_bar + K_bar.transpose());
+  return have_K;
+}
 
-  // 4. Per-point errors at the posterior (the visual map drops points that stay bad).
+/// Step 4. Per-point errors and pixels at the posterior (the visual map drops points that stay bad).
+void posteriorErrors(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
+                     const std::vector<PointState>& pts, VioUpdateResult& res) {
   double sq_after = 0;
   int n_after = 0;
   const Pose T_wc_post = x.pose() * T_imu_camera;
@@ -266,6 +267,26 @@ VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const 
     }
   }
   res.rms_after = n_after ? std::sqrt(sq_after / n_after) : 0.0;
+}
+
+}  // namespace
+
+VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg) {
+  VioUpdateResult res;
+  res.point_rms.assign(points.size(), -1.0);
+  res.point_px.assign(points.size(), Vec2::Zero());
+  // 1. Warps and the outlier gate at the prior.
+  std::vector<PointState> pts;
+  const double sq_before = gatePoints(x, gray, cam, T_imu_camera, points, cfg, pts, res);
+  if (res.points_used == 0) return res;
+  res.rms_before = std::sqrt(sq_before / res.points_used);
+  // 2. Iterated updates, coarse to fine.
+  StateCov K_bar = P;
+  // 3. Covariance once, from the last linearisation: P = (I - K_bar H^T R^-1 H) P_prop = K_bar.
+  if (iterateLevels(x, P, gray, cam, T_imu_camera, pts, cfg, K_bar, res)) P = 0.5 * (K_bar + K_bar.transpose());
+  // 4. Per-point errors at the posterior.
+  posteriorErrors(x, gray, cam, T_imu_camera, pts, res);
   return res;
 }
 
