@@ -10,72 +10,34 @@ void ImuConfig::load(const ConfigNode& n) {
   n.get("gyro_noise", gyro_noise).get("accel_noise", accel_noise);
   n.get("gyro_bias_walk", gyro_bias_walk).get("accel_bias_walk", accel_bias_walk);
   n.get("noise_scale", noise_scale).get("inv_exposure_walk", inv_exposure_walk);
-  n.get("gravity_m_s2", gravity_m_s2).get("init_samples", init_samples);
+  n.get("gravity_m_s2", gravity_m_s2).get("rate_hz", rate_hz).get("gravity_align", gravity_align);
+  n.get("init_samples", init_samples).get("init_static_factor", init_static_factor);
+  n.get("init_vibration_gyro_rad_s", init_vibration_gyro_rad_s).get("init_vibration_accel_mps2", init_vibration_accel_mps2);
   n.get("init_max_gyro_std", init_max_gyro_std).get("init_max_accel_std", init_max_accel_std);
-  n.get("init_max_samples", init_max_samples).get("gravity_align", gravity_align);
-  for (const char* k : {"gyro_noise", "accel_noise", "gyro_bias_walk", "accel_bias_walk"}) {
-    double v = 0;
-    n.get(k, v);
-    n.check(v >= 0, k, "must be >= 0");
-  }
-  n.check(noise_scale > 0, "noise_scale", "must be > 0");
+  n.get("init_static_wait_s", init_static_wait_s);
+  n.get("init_gyro_bias_sigma_rad_s", init_gyro_bias_sigma_rad_s).get("init_accel_bias_sigma_mps2", init_accel_bias_sigma_mps2);
+  // Densities: positive (a zero density makes every covariance singular) and below values no real
+  // IMU has (units: the key's; a typo of the unit, e.g. deg for rad, lands there).
+  const auto positiveBelow = [&](const char* key, double v, double max) {
+    n.check(std::isfinite(v) && v > 0 && v < max, key,
+            "must be > 0 and < " + std::to_string(max) + " (a continuous-time noise density), got " + std::to_string(v));
+  };
+  positiveBelow("gyro_noise", gyro_noise, 1.0);
+  positiveBelow("accel_noise", accel_noise, 10.0);
+  positiveBelow("gyro_bias_walk", gyro_bias_walk, 1.0);
+  positiveBelow("accel_bias_walk", accel_bias_walk, 10.0);
+  n.check(noise_scale > 0 && noise_scale < 1e3, "noise_scale", "must be in (0, 1000)");
+  n.check(rate_hz > 0 && rate_hz <= 1e5, "rate_hz", "must be in (0, 1e5] Hz");
   n.check(init_samples >= 5, "init_samples", "must be >= 5");
   n.check(gravity_m_s2 > 5 && gravity_m_s2 < 15, "gravity_m_s2", "must be about 9.8");
-}
-
-// ---------------- initialisation ----------------
-
-bool ImuInitializer::add(const ImuSample& s) {
-  if (done_) return true;
-  window_.push_back(s);
-  ++seen_;
-  const std::size_t n = static_cast<std::size_t>(cfg_.init_samples);
-  if (window_.size() > n) window_.erase(window_.begin());
-  if (window_.size() < n) return false;
-
-  Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
-  for (const auto& w : window_) {
-    mg += w.gyro;
-    ma += w.accel;
-  }
-  mg /= double(n);
-  ma /= double(n);
-  const double norm_a = ma.norm();
-  if (!(norm_a > 1e-3)) return false;  // no usable gravity yet
-  const double scale = cfg_.gravity_m_s2 / norm_a;
-  double var_g = 0, var_a = 0;
-  for (const auto& w : window_) {
-    var_g += (w.gyro - mg).squaredNorm();
-    var_a += ((w.accel - ma) * scale).squaredNorm();
-  }
-  const bool is_static = std::sqrt(var_g / n) < cfg_.init_max_gyro_std && std::sqrt(var_a / n) < cfg_.init_max_accel_std;
-  if (!is_static && seen_ < cfg_.init_max_samples) return false;
-  forced_ = !is_static;
-
-  accel_scale_ = scale;
-  state_ = NavState();
-  state_.utime = window_.back().utime;
-  state_.bg = mg;
-  // Gravity: the accelerometer at rest measures -g in the body frame (specific force).
-  const Vec3 up_body = ma.normalized();
-  if (cfg_.gravity_align) {
-    // R_world_imu with R * up_body = +z and no yaw component (shortest rotation).
-    state_.R_world_imu = Quat::FromTwoVectors(up_body, Vec3::UnitZ()).toRotationMatrix();
-    state_.g_world = Vec3(0, 0, -cfg_.gravity_m_s2);
-  } else {
-    state_.R_world_imu = Mat3::Identity();
-    state_.g_world = -up_body * cfg_.gravity_m_s2;
-  }
-  done_ = true;
-  return true;
-}
-
-std::string ImuInitializer::describe() const {
-  std::ostringstream os;
-  os << "IMU initialised from " << window_.size() << " samples" << (forced_ ? " (NOT static: forced)" : "")
-     << ", accel scale " << accel_scale_ << (std::abs(accel_scale_ - 1.0) > 0.2 ? " (g units detected)" : "")
-     << ", gyro bias [" << state_.bg.transpose() << "] rad/s";
-  return os.str();
+  n.check(init_static_factor >= 1 && init_static_factor <= 100, "init_static_factor", "must be in [1, 100]");
+  n.check(init_vibration_gyro_rad_s >= 0 && init_vibration_gyro_rad_s < 10, "init_vibration_gyro_rad_s", "must be in [0, 10) rad/s");
+  n.check(init_vibration_accel_mps2 >= 0 && init_vibration_accel_mps2 < 50, "init_vibration_accel_mps2", "must be in [0, 50) m/s^2");
+  n.check(init_max_gyro_std >= 0, "init_max_gyro_std", "must be >= 0 (0: derived from gyro_noise)");
+  n.check(init_max_accel_std >= 0, "init_max_accel_std", "must be >= 0 (0: derived from accel_noise)");
+  n.check(init_static_wait_s > 0 && init_static_wait_s <= 600, "init_static_wait_s", "must be in (0, 600] s");
+  n.check(init_gyro_bias_sigma_rad_s > 0 && init_gyro_bias_sigma_rad_s < 1, "init_gyro_bias_sigma_rad_s", "must be in (0, 1) rad/s");
+  n.check(init_accel_bias_sigma_mps2 > 0 && init_accel_bias_sigma_mps2 < 5, "init_accel_bias_sigma_mps2", "must be in (0, 5) m/s^2");
 }
 
 // ---------------- propagation ----------------

@@ -10,6 +10,7 @@ namespace livo {
 
 void LioOdometryConfig::load(const ConfigNode& root) {
   imu.load(root.section("imu"));
+  motion_init.load(root.section("imu"));
   lio.load(root);
   map.load(root.section("voxel_map"));
   const ConfigNode lidar = root.section("lidar");
@@ -20,7 +21,43 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   root.section("lio").get("min_matches", min_matches);
 }
 
-LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {}
+LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {
+  motion_ = std::make_unique<MotionInitializer>(
+      cfg_.imu, cfg_.motion_init, cfg_.map, cfg_.lio, cfg_.min_matches,
+      [this](const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) { return preparePoints(sweep, trace); });
+}
+
+LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
+  for (const auto& s : frame.imu) {
+    if (s.utime <= last_imu_fed_) continue;
+    last_imu_fed_ = s.utime;
+    if (init_.add(s)) break;  // the rest of the frame's samples are propagated below
+  }
+  if (init_.done()) {
+    x_ = init_.initialState();
+    P_ = init_.initialCovariance();
+    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+    // Through the samples after the chosen window, up to where this frame's own samples begin (the
+    // frame's propagation keeps its trace for the undistortion).
+    const Utime cut = frame.imu.empty() ? x_.utime : frame.imu.front().utime;
+    std::vector<ImuSample> before;
+    for (const auto& s : init_.samplesAfterWindow())
+      if (s.utime < cut) before.push_back(s);
+    if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+    motion_.reset();
+    init_message_ = init_.describe();
+    return InitStep::AtRest;
+  }
+  // From motion: the motion initialiser sees every frame from the first one; its state is taken once
+  // the static search has given up (a static window, when there is one, observes the gyro bias).
+  if (motion_->process(frame) && init_.noStaticWindow()) {
+    motion_->takeOver(x_, P_);
+    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, motion_->accelScale());
+    init_message_ = "no static window within " + std::to_string(cfg_.imu.init_static_wait_s) + " s; " + motion_->describe();
+    return InitStep::InMotion;
+  }
+  return InitStep::Waiting;
+}
 
 std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
                                                   const std::vector<ImuTracePoint>& trace) const {
@@ -65,18 +102,21 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
   watch_.restart();
 
-  // 1a. Static initialisation from the first IMU samples (gravity, gyro bias, g units).
-  if (!init_.done()) {
-    for (const auto& s : frame.imu) {
-      if (s.utime <= last_imu_fed_) continue;
-      last_imu_fed_ = s.utime;
-      if (init_.add(s)) break;
+  // 1a. Initialisation: at rest (gravity, gyro bias, g units) or, without a static window, from motion.
+  if (!initialized_) {
+    const InitStep step = initialise(frame);
+    if (step == InitStep::Waiting) return false;
+    initialized_ = true;
+    if (step == InitStep::InMotion) {  // this frame's points are registered and undistorted already
+      r.initialized = true;
+      r.points = std::move(motion_->points());
+      r.n_points = static_cast<int>(r.points.size());
+      r.state = x_;
+      r.P = P_;
+      motion_.reset();
+      map_started_ = false;  // the odometry's map starts with this frame's scan
+      return true;
     }
-    if (!init_.done()) return false;
-    x_ = init_.initialState();
-    P_ = initialCovariance();
-    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
-    init_message_ = init_.describe();
   }
   r.initialized = true;
   if (frame.utime <= x_.utime) {  // a frame inside the initialisation window: nothing to estimate yet

@@ -18,38 +18,32 @@ struct ImuConfig {
   double noise_scale = 1.0;         ///< multiplies the four densities (inflate for unmodelled effects)
   double inv_exposure_walk = 0.1;   ///< 1/sqrt(s), random walk of tau
   double gravity_m_s2 = 9.81;       ///< local gravity magnitude
-  int init_samples = 30;            ///< samples averaged by the static initialisation
-  double init_max_gyro_std = 0.05;  ///< rad/s: above this the window is not static
-  double init_max_accel_std = 0.3;  ///< m/s^2 (after scaling to m/s^2)
-  int init_max_samples = 2000;      ///< give up waiting for a static window after this many samples
+  double rate_hz = 200.0;           ///< imu.rate_hz: nominal sample rate (the static test's noise per sample)
   bool gravity_align = true;        ///< rotate the world so that gravity is (0, 0, -g) (world z up)
+  // Initialisation (imu_init.hpp, lio_odometry.hpp):
+  int init_samples = 30;            ///< samples of the static window
+  /// A window is static when the RMS deviation of its gyro and accelerometer samples is below
+  /// init_static_factor times the RMS the configured white noise gives (sqrt(3) density sqrt(rate)
+  /// noise_scale per sensor) plus the rig's vibration at rest below.
+  double init_static_factor = 3.0;
+  double init_vibration_gyro_rad_s = 0.0;   ///< RMS gyro vibration of the rig at rest (rotors, engine), rad/s
+  double init_vibration_accel_mps2 = 0.0;   ///< RMS accelerometer vibration at rest, m/s^2
+  double init_max_gyro_std = 0.0;   ///< rad/s: explicit static threshold replacing the derived one (0: derive)
+  double init_max_accel_std = 0.0;  ///< m/s^2: explicit static threshold (0: derive)
+  /// Without a static window this long after the first sample (at least one window), the odometry
+  /// initialises from motion (lio_odometry.hpp); the calmest static window seen is used otherwise.
+  double init_static_wait_s = 1.0;
+  double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of a gyro bias no static window observed
+  double init_accel_bias_sigma_mps2 = 0.02;   ///< prior sigma of the accelerometer bias (never observed at start)
 
-  /// Reads the `imu` section (noise densities, init_samples, ...).
+  /// Reads the `imu` section (noise densities, rate, initialisation); errors name the key.
   void load(const ConfigNode& imu);
-};
-
-/// Averages the first static IMU samples: gyro bias, gravity direction, accelerometer scale (g units).
-class ImuInitializer {
- public:
-  explicit ImuInitializer(const ImuConfig& cfg) : cfg_(cfg) {}
-  /// Adds a sample; returns true once initialised.
-  bool add(const ImuSample& s);
-  bool done() const { return done_; }
-  /// Scale applied to every accelerometer reading: g / |mean accel| (about 9.81 for g-unit IMUs).
-  double accelScale() const { return accel_scale_; }
-  /// Initial state: R from gravity alignment (or identity), zero position and velocity, bg = mean gyro.
-  NavState initialState() const { return state_; }
-  /// True when the window was not static but the initialiser gave up waiting (warning for the user).
-  bool forced() const { return forced_; }
-  std::string describe() const;
-
- private:
-  ImuConfig cfg_;
-  std::vector<ImuSample> window_;
-  int seen_ = 0;
-  bool done_ = false, forced_ = false;
-  double accel_scale_ = 1.0;
-  NavState state_;
+  /// Static-test thresholds: RMS deviation of a static window, gyro rad/s and accel m/s^2.
+  double staticGyroThreshold() const;
+  double staticAccelThreshold() const;
+  /// White-noise sigma of one sample (density * noise_scale * sqrt(rate)).
+  double gyroSampleSigma() const;
+  double accelSampleSigma() const;
 };
 
 /// State at one IMU sample, with the unbiased rate and world acceleration used for the interval that

@@ -5,6 +5,8 @@
 #include "livo/common/config.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/estimation/imu.hpp"
+#include "livo/estimation/imu_init.hpp"
+#include "livo/estimation/motion_init.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/point_cov.hpp"
@@ -17,6 +19,7 @@ namespace livo {
 
 struct LioOdometryConfig {
   ImuConfig imu;
+  MotionInitConfig motion_init;  ///< keys imu.init_motion_* (initialisation without a static window)
   LioConfig lio;
   VoxelMapConfig map;
   Pose T_imu_lidar = Pose::Identity();
@@ -55,9 +58,10 @@ class LioOdometry {
   explicit LioOdometry(LioOdometryConfig cfg);
 
   // The LiDAR-inertial phases of a frame, in this order:
-  /// Step 1: initialisation, propagation to the frame time, undistortion and downsampling. Returns
-  /// true when r.points wait for update() (r.state holds the prediction); false when there is
-  /// nothing to estimate (IMU not initialised yet, frame inside the initialisation window).
+  /// Step 1: initialisation (at rest: imu_init.hpp; else from motion: motion_init.hpp), propagation
+  /// to the frame time, undistortion and downsampling. Returns true when r.points wait for update()
+  /// (r.state holds the prediction); false when there is nothing to estimate (IMU not initialised
+  /// yet, frame inside the initialisation window).
   bool predict(const Frame& frame, LioFrameResult& r);
   /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
   /// r.P, r.lio_ms (since predict()) and the match results.
@@ -75,14 +79,21 @@ class LioOdometry {
   const LioOdometryConfig& config() const { return cfg_; }
   const NavState& state() const { return x_; }
   const StateCov& covariance() const { return P_; }
-  bool initialized() const { return init_.done(); }
+  bool initialized() const { return initialized_; }
+  /// How the IMU was initialised (after initialized()), or what it waits for.
   const std::string& initMessage() const { return init_message_; }
 
  private:
   std::vector<BodyPoint> preparePoints(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const;
+  enum class InitStep { Waiting, AtRest, InMotion };
+  /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
+  /// propagator when one of them is done.
+  InitStep initialise(const Frame& frame);
 
   LioOdometryConfig cfg_;
   ImuInitializer init_;
+  std::unique_ptr<MotionInitializer> motion_;  ///< until initialised
+  bool initialized_ = false;
   std::unique_ptr<ImuPropagator> propagator_;
   NavState x_;
   StateCov P_ = initialCovariance();

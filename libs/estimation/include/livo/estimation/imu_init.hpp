@@ -1,0 +1,70 @@
+// Static IMU initialisation that follows the sensor's configured noise (ALGORITHMS.md section 1).
+//
+// Every full window of init_samples samples is tested: it is static when the RMS deviation of its
+// gyro samples is below ImuConfig::staticGyroThreshold() and that of its accelerometer samples (in
+// m/s^2) below staticAccelThreshold(); both derive from the configured noise densities and rate (a
+// documented factor, plus the rig's vibration margin), and its mean rate must be a plausible bias (at
+// most 5 init_gyro_bias_sigma_rad_s: a steady turn is calm too). Of the static windows seen, the calmest (the
+// smallest ratio of RMS deviation to threshold) is used, once the calm ends (a window in motion
+// follows) or init_static_wait_s after the first sample, whichever comes first. A window in motion is
+// never used: when none is static by then, noStaticWindow() says so and the odometry initialises
+// from motion (lio_odometry.hpp); later static windows are still taken if they come first.
+//
+// The state is at the end of the chosen window: gyro bias = mean gyro, gravity from the mean
+// specific force (its norm also gives the accelerometer scale: g-unit IMUs), zero velocity. The
+// covariance says what was observed: the gyro bias to sigma_gyro / sqrt(n) per axis, roll and pitch
+// to sigma_accel / (g sqrt(n)); yaw and position are the world frame's definition; the accelerometer
+// bias is not observable at rest (init_accel_bias_sigma_mps2).
+#pragma once
+
+#include "livo/estimation/imu.hpp"
+#include "livo/estimation/state.hpp"
+
+#include <deque>
+#include <string>
+#include <vector>
+
+namespace livo {
+
+class ImuInitializer {
+ public:
+  explicit ImuInitializer(const ImuConfig& cfg) : cfg_(cfg) {}
+  /// Adds a sample (time order; older or duplicate stamps are ignored). Returns done().
+  bool add(const ImuSample& s);
+  /// A static window was chosen: initialState() and friends are valid.
+  bool done() const { return done_; }
+  /// No static window within the wait: initialise from motion (static windows are still looked for).
+  bool noStaticWindow() const { return no_static_; }
+  /// Scale applied to every accelerometer reading: g / |mean accel| (about 9.81 for g-unit IMUs).
+  double accelScale() const { return accel_scale_; }
+  /// State at the end of the chosen window.
+  NavState initialState() const { return state_; }
+  /// Prior covariance from what the window observed (see the file comment).
+  StateCov initialCovariance() const;
+  /// Samples after the chosen window (the odometry propagates the state through them).
+  std::vector<ImuSample> samplesAfterWindow() const;
+  /// Time of the first sample (-1 before any).
+  Utime firstSampleTime() const { return first_utime_; }
+  std::string describe() const;
+
+ private:
+  struct WindowStats {
+    Vec3 mean_gyro = Vec3::Zero(), mean_accel = Vec3::Zero();
+    double rms_gyro = 0, rms_accel = 0, scale = 1.0;
+    double score = 0;  ///< max(rms_gyro / gyro threshold, rms_accel / accel threshold); static below 1
+    Utime end = 0;
+    int n = 0;
+  };
+  bool windowStats(WindowStats& w) const;  ///< the last init_samples samples; false without gravity
+  void choose(const WindowStats& w);
+
+  ImuConfig cfg_;
+  std::deque<ImuSample> samples_;  ///< since the first sample, bounded (see add())
+  Utime first_utime_ = -1;
+  bool have_best_ = false, done_ = false, no_static_ = false;
+  WindowStats best_;
+  double accel_scale_ = 1.0;
+  NavState state_;
+};
+
+}  // namespace livo
