@@ -243,23 +243,22 @@ void VoxelMap::load(std::istream& is) {
 
 // ---- HybridMap ----
 void HybridMap::save(std::ostream& os) const {
-  lidar_.save(os);
-  saveVisual(os, local_visual_);
-  saveVisual(os, longterm_visual_);
+  lidar_.voxels().save(os);
+  saveVisual(os, visual_.local());
+  saveVisual(os, visual_.longterm());
 }
 
 void HybridMap::load(std::istream& is) {
   clear();
   try {
     lidar_.load(is);
-    lidar_.forEachRoot([this](const VoxelKey& k) { tiles_.add(k); });
-    loadVisual(is, local_visual_);
-    loadVisual(is, longterm_visual_);
+    loadVisual(is, visual_.local());
+    loadVisual(is, visual_.longterm());
   } catch (...) {
     clear();
     throw;
   }
-  calibrated_ = false;  // the next update() makes an exact count
+  requestExactCount();  // the next update() makes an exact count
 }
 
 // ---- files ----
