@@ -1,4 +1,5 @@
-// Binary map files (map_file.hpp) and the save/load members of OctreeNode, VoxelMap and HybridMap.
+// Binary map files (map_file.hpp): the save/load members of OctreeNode and VoxelMap, the hybrid
+// map's content (LiDAR map and both visual maps) and the file header.
 #include "livo/map/map_file.hpp"
 
 #include "octree_node.hpp"
@@ -241,25 +242,29 @@ void VoxelMap::load(std::istream& is) {
   }
 }
 
-// ---- HybridMap ----
-void HybridMap::save(std::ostream& os) const {
-  lidar_.voxels().save(os);
-  saveVisual(os, visual_.local());
-  saveVisual(os, visual_.longterm());
+// ---- HybridMap content: the LiDAR map, then the local and the long-term visual map ----
+namespace {
+void saveContent(std::ostream& os, const HybridMap& map) {
+  map.lidar().voxels().save(os);
+  saveVisual(os, map.visual().local());
+  saveVisual(os, map.visual().longterm());
 }
 
-void HybridMap::load(std::istream& is) {
-  clear();
+// Counters, cube centres and pending slide work are not part of it: the first update() after loading
+// centres the cubes at the robot again (and, with a cap, makes an exact byte count).
+void loadContent(std::istream& is, HybridMap& map) {
+  map.clear();
   try {
-    lidar_.load(is);
-    loadVisual(is, visual_.local());
-    loadVisual(is, visual_.longterm());
+    map.lidar().load(is);
+    loadVisual(is, map.visual().local());
+    loadVisual(is, map.visual().longterm());
   } catch (...) {
-    clear();
+    map.clear();
     throw;
   }
-  requestExactCount();  // the next update() makes an exact count
+  map.requestExactCount();
 }
+}  // namespace
 
 // ---- files ----
 std::string MapFileInfo::describe() const {
@@ -273,10 +278,10 @@ std::string MapFileInfo::describe() const {
 namespace {
 MapFileInfo infoOf(const HybridMap& map, std::size_t bytes) {
   MapFileInfo info;
-  info.root_voxels = map.lidarMap().numRootVoxels();
-  info.planes = map.lidarMap().numPlanes();
-  info.visual_points_local = map.localVisual().size();
-  info.visual_points_longterm = map.longtermVisual().size();
+  info.root_voxels = map.lidar().voxels().numRootVoxels();
+  info.planes = map.lidar().voxels().numPlanes();
+  info.visual_points_local = map.visual().local().size();
+  info.visual_points_longterm = map.visual().longterm().size();
   info.file_bytes = bytes;
   return info;
 }
@@ -307,11 +312,12 @@ MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
       throw std::runtime_error("version " + std::to_string(version) + ", this build reads " + std::to_string(kVersion));
     const double vs = get<double>(is, "voxel size");
     const double vvs = get<double>(is, "visual voxel size");
-    if (vs != map.lidarMap().config().voxel_size_m || vvs != map.localVisual().config().voxel_size_m)
+    const double cfg_vs = map.lidar().voxels().config().voxel_size_m;
+    const double cfg_vvs = map.visual().local().config().voxel_size_m;
+    if (vs != cfg_vs || vvs != cfg_vvs)
       throw std::runtime_error("written with voxel sizes " + std::to_string(vs) + " / " + std::to_string(vvs) +
-                               " m, configured " + std::to_string(map.lidarMap().config().voxel_size_m) + " / " +
-                               std::to_string(map.localVisual().config().voxel_size_m) + " m");
-    map.load(is);
+                               " m, configured " + std::to_string(cfg_vs) + " / " + std::to_string(cfg_vvs) + " m");
+    loadContent(is, map);
     if (is.peek() != std::char_traits<char>::eof()) throw std::runtime_error("trailing bytes after the map");
   } catch (const std::exception& e) {
     map.clear();
@@ -331,9 +337,9 @@ MapFileInfo loadMap(const std::string& path, HybridMap& map) {
 MapFileInfo saveMap(std::ostream& os, const HybridMap& map) {
   os.write(kMagic, sizeof(kMagic));
   put(os, kVersion);
-  put(os, map.lidarMap().config().voxel_size_m);
-  put(os, map.localVisual().config().voxel_size_m);
-  map.save(os);
+  put(os, map.lidar().voxels().config().voxel_size_m);
+  put(os, map.visual().local().config().voxel_size_m);
+  saveContent(os, map);
   return infoOf(map, 0);
 }
 

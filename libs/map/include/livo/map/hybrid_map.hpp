@@ -31,8 +31,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <istream>
-#include <ostream>
 #include <utility>
 #include <vector>
 
@@ -124,8 +122,6 @@ class HybridMap {
   const Vec3& localCenter() const { return slides_.localCenter(); }
   const Vec3& longtermCenter() const { return slides_.longtermCenter(); }
   std::size_t pendingWork() const { return slides_.pending() + cap_.pending(); }
-  void save(std::ostream& os) const;
-  void load(std::istream& is);
 
  private:
   std::size_t workBytes() const { return slides_.workBytes() + cap_.workBytes(); }
