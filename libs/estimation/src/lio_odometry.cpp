@@ -147,12 +147,12 @@ LioFrameResult LioOdometry::process(const Frame& frame) {
   LioFrameResult r;
   if (!predict(frame, r)) return r;
   if (map_ == nullptr) throw std::logic_error("LioOdometry::process: no map (remote mode: use predict/update)");
-  update(r, map_->lidarMap());
+  update(r, map_->lidar().voxels());
   // 5. Map insertion with the posterior pose. As in the reference, the map grows every frame (a failed
   // update keeps the IMU prediction).
   Stopwatch map_watch;
   if (!r.points.empty()) {
-    map_->insertLidar(worldPoints(r.points));
+    map_->lidar().insert(worldPoints(r.points));
     markInserted(r);
   }
   r.map_ms = map_watch.elapsedMs();

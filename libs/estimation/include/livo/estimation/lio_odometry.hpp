@@ -88,7 +88,7 @@ class LioOdometry {
   /// The LiDAR voxel map (the local map in hybrid mode).
   const VoxelMap& map() const {
     if (map_ == nullptr) throw std::logic_error("LioOdometry::map: the map is remote");
-    return map_->lidarMap();
+    return map_->lidar().voxels();
   }
   const NavState& state() const { return x_; }
   const StateCov& covariance() const { return P_; }

@@ -14,8 +14,9 @@
 // global mode (FAST-LIVO2 behaviour): one unbounded LiDAR map and one visual map; update() does nothing.
 //
 // Pointers: Plane* (lidar().voxels().findBestPlane) stay valid until the next LiDAR insertion,
-// update() or clear(); VisualPoint* (visual().pointsInView / find) until that point leaves its map:
-// visual().removeBadPoints() or upsert(), update() or clear() (details in the parts' headers).
+// update(), clear() or map file load; VisualPoint* (visual().pointsInView / find) until that point
+// leaves its map: visual().removeBadPoints() or upsert(), update(), clear() or a map file load
+// (details in the parts' headers).
 // Thread safety: const member functions may run concurrently; everything else needs exclusive access.
 #pragma once
 
@@ -30,9 +31,6 @@
 #include "livo/map/voxel_map.hpp"
 
 #include <cstddef>
-#include <cstdint>
-#include <utility>
-#include <vector>
 
 namespace livo {
 
@@ -48,7 +46,7 @@ class HybridMap {
   /// and the two maps (visual().local(), visual().longterm()).
   DualVisualMap& visual() { return visual_; }
   const DualVisualMap& visual() const { return visual_; }
-  /// Cube centres and pending slide work (changed by update() only).
+  /// Cube centres and pending slide work (changed by update(), finishPendingWork() and clear()).
   const SlidePolicy& slides() const { return slides_; }
 
   // --- Maintenance ----------------------------------------------------------------------------------
@@ -81,47 +79,6 @@ class HybridMap {
   MapMode mode() const { return cfg_.mode; }
   /// Empties every part (counters and the byte model's calibration are kept).
   void clear();
-
-  // --- Former interface, forwarding to the parts (call sites move to the parts next) ---------------
-  std::size_t insertLidar(const std::vector<PointWithCov>& points) { return lidar_.insert(points); }
-  const VoxelMap& lidarMap() const { return lidar_.voxels(); }
-  ImageGrid gridFor(const CameraModel& cam) const { return visual_.gridFor(cam); }
-  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                         const std::vector<Vec3>& scan_points_world,
-                                         std::vector<Vec2>* pixels = nullptr) {
-    return visual_.pointsInView(cam, T_world_camera, scan_points_world, pixels);
-  }
-  const std::vector<bool>& occupiedCells() const { return visual_.occupiedCells(); }
-  const VisualRetrievalStats& lastRetrieval() const { return visual_.lastRetrieval(); }
-  std::size_t lastRetrievalLongterm() const { return visual_.lastRetrievalLongterm(); }
-  int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure, Utime t,
-                const std::vector<NewPointCandidate>& candidates, const std::vector<bool>& occupied_cells) {
-    return visual_.addPoints(gray, cam, T_world_camera, inv_exposure, t, candidates, occupied_cells);
-  }
-  bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
-                      float inv_exposure, Utime t) {
-    return visual_.addObservation(p, gray, T_world_camera, px, inv_exposure, t);
-  }
-  void refine(VisualPoint& p) { visual_.refine(p, &lidar_.voxels()); }
-  void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate) {
-    visual_.reportPhotometricError(p, mean_sq_error, gate);
-  }
-  std::size_t removeBadPoints() { return visual_.removeBadPoints(); }
-  bool isLongterm(const VisualPoint& p) const { return visual_.isLongterm(p); }
-  std::size_t copyVisualPointsIn(const std::vector<VoxelKey>& visual_keys, std::vector<VisualPoint>& out) const {
-    return visual_.copyPointsIn(visual_keys, out);
-  }
-  bool upsertVisualPoint(VisualPoint p) { return visual_.upsert(std::move(p)); }
-  bool appendObservation(std::int64_t id, const VisualObservation& obs) {
-    return visual_.appendObservation(id, obs, &lidar_.voxels());
-  }
-  std::int64_t nextVisualPointId() const { return visual_.nextId(); }
-  const VisualMap& localVisual() const { return visual_.local(); }
-  const VisualMap& longtermVisual() const { return visual_.longterm(); }
-  VisualMap& localVisual() { return visual_.local(); }
-  const Vec3& localCenter() const { return slides_.localCenter(); }
-  const Vec3& longtermCenter() const { return slides_.longtermCenter(); }
-  std::size_t pendingWork() const { return slides_.pending() + cap_.pending(); }
 
  private:
   std::size_t workBytes() const { return slides_.workBytes() + cap_.workBytes(); }
