@@ -70,13 +70,13 @@ Scene fillScene(HybridMap& map, unsigned seed) {
   std::mt19937 rng(seed);
   std::vector<PointWithCov> pts;
   groundPatch(pts, -60, 60, -60, 60, 0.3, 1.0, rng);
-  EXPECT_EQ(map.insertLidar(pts), pts.size());
-  for (const auto& p : pts) sc.roots.insert(tup(map.lidarMap().keyOf(p.p_world)));
+  EXPECT_EQ(map.lidar().insert(pts), pts.size());
+  for (const auto& p : pts) sc.roots.insert(tup(map.lidar().voxels().keyOf(p.p_world)));
   std::uniform_real_distribution<double> u(-59, 59);
   for (std::int64_t id = 1; id <= 3000; ++id) {
     const Vec3 p(u(rng), u(rng), 1.0 + 0.01 * double(id % 50));
     const bool ref = id % 7 != 0;
-    EXPECT_TRUE(map.localVisual().insert(visualPoint(id, p, ref, 1 + int(id % 4))));
+    EXPECT_TRUE(map.visual().local().insert(visualPoint(id, p, ref, 1 + int(id % 4))));
     sc.points[id] = {p, ref};
   }
   return sc;
@@ -96,7 +96,7 @@ struct SlideModel {
   void apply(const HybridMap& map, const MapUpdateReport& rep) {
     if (rep.longterm_slid) {
       for (auto it = longterm.begin(); it != longterm.end();) {
-        if (outside(vc(it->second.first), map.longtermCenter(), lt_half)) {
+        if (outside(vc(it->second.first), map.slides().longtermCenter(), lt_half)) {
           it = longterm.erase(it);
           ++lt_deleted;
         } else {
@@ -105,7 +105,7 @@ struct SlideModel {
       }
     }
     if (!rep.slid) return;
-    const Vec3 c = map.localCenter();
+    const Vec3 c = map.slides().localCenter();
     for (auto it = roots.begin(); it != roots.end();) {
       const VoxelKey k{std::get<0>(*it), std::get<1>(*it), std::get<2>(*it)};
       it = outside(k.center(lidar_voxel), c, local_half) ? roots.erase(it) : std::next(it);
@@ -124,19 +124,19 @@ struct SlideModel {
         ++it;
         continue;
       }
-      if (it->second.second && !outside(vc(it->second.first), map.longtermCenter(), lt_half)) longterm.insert(*it);
+      if (it->second.second && !outside(vc(it->second.first), map.slides().longtermCenter(), lt_half)) longterm.insert(*it);
       it = local.erase(it);
     }
     local.insert(back.begin(), back.end());
   }
   void expectMatches(const HybridMap& map) const {
-    EXPECT_EQ(rootKeysWithPlanes(map.lidarMap()), roots);
-    EXPECT_EQ(map.lidarMap().numRootVoxels(), roots.size());
+    EXPECT_EQ(rootKeysWithPlanes(map.lidar().voxels()), roots);
+    EXPECT_EQ(map.lidar().voxels().numRootVoxels(), roots.size());
     std::set<std::int64_t> want_local, want_lt;
     for (const auto& kv : local) want_local.insert(kv.first);
     for (const auto& kv : longterm) want_lt.insert(kv.first);
-    EXPECT_EQ(ids(map.localVisual()), want_local);
-    EXPECT_EQ(ids(map.longtermVisual()), want_lt);
+    EXPECT_EQ(ids(map.visual().local()), want_local);
+    EXPECT_EQ(ids(map.visual().longterm()), want_lt);
   }
 };
 
@@ -152,7 +152,7 @@ SlideModel modelOf(const Scene& sc) {
 TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
   HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
   const Scene sc = fillScene(map, 7);
-  ASSERT_EQ(rootKeysWithPlanes(map.lidarMap()).size(), sc.roots.size()) << "every root must hold a plane";
+  ASSERT_EQ(rootKeysWithPlanes(map.lidar().voxels()).size(), sc.roots.size()) << "every root must hold a plane";
   SlideModel model = modelOf(sc);
   for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(3, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0), Vec3(31, -4, 0)}) {
     const MapUpdateReport rep = map.update(robot);
@@ -170,7 +170,7 @@ TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
   EXPECT_GT(map.counters().deleted_points, 100u);  // points without a reference are not kept
   EXPECT_GT(map.counters().moved_to_local, 10u);   // the cube at x = 31 covers points that left at x = 13
   // Long-term points keep their reference patch only (fillScene: the last of 1 + id % 4).
-  map.longtermVisual().forEach([](const VisualPoint& p) {
+  map.visual().longterm().forEach([](const VisualPoint& p) {
     EXPECT_EQ(p.reference, 0);
     EXPECT_EQ(p.obs[0].utime, p.id % 4);
     EXPECT_EQ(p.obs.size(), 1u);
@@ -196,9 +196,9 @@ TEST(HybridMap, SlideWorkIsSpreadOverUpdatesWithinTheBudget) {
   }
   std::cout << "slide work over " << updates << " updates of at most 150 items\n";
   EXPECT_GT(updates, 10);
-  EXPECT_EQ(rootKeysWithPlanes(budgeted.lidarMap()), rootKeysWithPlanes(full.lidarMap()));
-  EXPECT_EQ(ids(budgeted.localVisual()), ids(full.localVisual()));
-  EXPECT_EQ(ids(budgeted.longtermVisual()), ids(full.longtermVisual()));
+  EXPECT_EQ(rootKeysWithPlanes(budgeted.lidar().voxels()), rootKeysWithPlanes(full.lidar().voxels()));
+  EXPECT_EQ(ids(budgeted.visual().local()), ids(full.visual().local()));
+  EXPECT_EQ(ids(budgeted.visual().longterm()), ids(full.visual().longterm()));
 }
 
 TEST(HybridMap, LongtermDeletesBeyondItsEdgeAndRevisitsReturnPoints) {
@@ -228,7 +228,7 @@ TEST(HybridMap, MemoryCapEvictsFarthestLongtermPointsFirst) {
   const HybridMapStats before = map.stats();
   ASSERT_GT(before.visual_points_longterm, 500u);
   std::map<std::int64_t, double> lt_dist;
-  map.longtermVisual().forEach([&](const VisualPoint& p) { lt_dist[p.id] = (p.p_world - robot).norm(); });
+  map.visual().longterm().forEach([&](const VisualPoint& p) { lt_dist[p.id] = (p.p_world - robot).norm(); });
   // A cap that part of the long-term map must make room for.
   const double cap_mb = double(before.bytes - before.bytes_visual_longterm / 2) / (1024.0 * 1024.0);
   map.setMemoryCapMb(cap_mb);
@@ -245,7 +245,7 @@ TEST(HybridMap, MemoryCapEvictsFarthestLongtermPointsFirst) {
   // Farthest first: every kept long-term point is at most as far from the robot as every evicted one.
   double max_kept = 0.0, min_evicted = 1e300;
   for (const auto& [id, d] : lt_dist) {
-    if (map.longtermVisual().find(id)) max_kept = std::max(max_kept, d);
+    if (map.visual().longterm().find(id)) max_kept = std::max(max_kept, d);
     else min_evicted = std::min(min_evicted, d);
   }
   EXPECT_LE(max_kept, min_evicted);
@@ -271,22 +271,22 @@ TEST(HybridMap, MemoryCapEvictsFarthestLocalContentWhenLongtermIsGone) {
   EXPECT_EQ(s.visual_points_longterm, 0u);
   EXPECT_GT(rep.evicted_local_voxels, 0u);
   // Farthest first over voxels (centres) and local points (positions) together.
-  const std::set<KeyT> kept = rootKeysWithPlanes(map.lidarMap());
+  const std::set<KeyT> kept = rootKeysWithPlanes(map.lidar().voxels());
   double max_kept = 0.0, min_evicted = 1e300;
   for (const KeyT& k : sc.roots) {
     const VoxelKey key{std::get<0>(k), std::get<1>(k), std::get<2>(k)};
     const Vec3 c = key.center(1.0);
-    if (outside(c, map.localCenter(), 20.0)) continue;  // removed by the slide, not the cap
+    if (outside(c, map.slides().localCenter(), 20.0)) continue;  // removed by the slide, not the cap
     const double d = (c - robot).norm();
     if (kept.count(k)) max_kept = std::max(max_kept, d);
     else min_evicted = std::min(min_evicted, d);
   }
   // Local points: kept ones count as kept, those inside the cube that are gone were evicted.
-  const double vs = map.localVisual().config().voxel_size_m;
+  const double vs = map.visual().local().config().voxel_size_m;
   for (const auto& [id, pr] : sc.points) {
-    if (outside(VoxelKey::fromPoint(pr.first, vs).center(vs), map.localCenter(), 20.0)) continue;
+    if (outside(VoxelKey::fromPoint(pr.first, vs).center(vs), map.slides().localCenter(), 20.0)) continue;
     const double d = (pr.first - robot).norm();
-    if (map.localVisual().find(id)) max_kept = std::max(max_kept, d);
+    if (map.visual().local().find(id)) max_kept = std::max(max_kept, d);
     else min_evicted = std::min(min_evicted, d);
   }
   EXPECT_LE(max_kept, min_evicted + 1e-9);
@@ -342,9 +342,9 @@ TEST(HybridMap, GlobalModeNeverSlidesNorEvicts) {
     EXPECT_FALSE(rep.slid);
     EXPECT_EQ(rep.removed_voxels + rep.evicted_local_voxels + rep.evicted_longterm_points, 0u);
   }
-  EXPECT_EQ(map.lidarMap().numRootVoxels(), sc.roots.size());
-  EXPECT_EQ(map.localVisual().size(), sc.points.size());
-  EXPECT_EQ(map.longtermVisual().size(), 0u);
+  EXPECT_EQ(map.lidar().voxels().numRootVoxels(), sc.roots.size());
+  EXPECT_EQ(map.visual().local().size(), sc.points.size());
+  EXPECT_EQ(map.visual().longterm().size(), 0u);
   EXPECT_EQ(map.counters().slides + map.counters().eviction_events, 0u);
   EXPECT_GT(map.stats().bytes, cfg.capBytes()) << "the cap does not apply in global mode";
   EXPECT_EQ(map.stats().cap_bytes, 0u);
@@ -366,7 +366,7 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   R_wc << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   Pose T_wc = Pose::Identity();
   T_wc.linear() = R_wc;
-  const ImageGrid grid = map.gridFor(*cam);
+  const ImageGrid grid = map.visual().gridFor(*cam);
   map.update(Vec3(0, 0, 0));
   // One point per grid cell centre (cells 30 px apart: no occlusion between them), depth 4 m (stays
   // local) or 30 m (moves to the long-term map when the cube slides to x = -15).
@@ -378,42 +378,42 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
       const double z = (r + c) % 2 == 0 ? 4.0 : 30.0;
       const Vec2 px((c + 0.5) * grid.cell_px, (r + 0.5) * grid.cell_px);
       const Vec3 p = T_wc * Vec3((px.x() - cc.cx) / cc.fx * z, (px.y() - cc.cy) / cc.fy * z, z);
-      ASSERT_TRUE(map.localVisual().insert(visualPoint(id, p)));
+      ASSERT_TRUE(map.visual().local().insert(visualPoint(id, p)));
       scan.push_back(p);
       cell_id[grid.cellOf(px)] = id;
     }
   map.update(Vec3(-15, 0, 0));  // cube [-35, 5] in x
-  ASSERT_GT(map.longtermVisual().size(), 50u);
-  ASSERT_GT(map.localVisual().size(), 50u);
+  ASSERT_GT(map.visual().longterm().size(), 50u);
+  ASSERT_GT(map.visual().local().size(), 50u);
   std::vector<Vec2> pixels;
-  const std::vector<VisualPoint*> got = map.pointsInView(*cam, T_wc, scan, &pixels);
+  const std::vector<VisualPoint*> got = map.visual().pointsInView(*cam, T_wc, scan, &pixels);
   ASSERT_EQ(got.size(), cell_id.size());
   ASSERT_EQ(pixels.size(), got.size());
   std::size_t k = 0, from_lt = 0;
   for (const auto& [cell, want] : cell_id) {  // ordered by cell
     EXPECT_EQ(got[k]->id, want);
     EXPECT_EQ(grid.cellOf(pixels[k]), cell);
-    EXPECT_TRUE(map.occupiedCells()[std::size_t(cell)]);
-    from_lt += map.isLongterm(*got[k]);
+    EXPECT_TRUE(map.visual().occupiedCells()[std::size_t(cell)]);
+    from_lt += map.visual().isLongterm(*got[k]);
     ++k;
   }
-  EXPECT_EQ(from_lt, map.longtermVisual().size());
-  EXPECT_EQ(map.lastRetrievalLongterm(), from_lt);
-  EXPECT_EQ(map.lastRetrieval().selected, got.size());
+  EXPECT_EQ(from_lt, map.visual().longterm().size());
+  EXPECT_EQ(map.visual().lastRetrievalLongterm(), from_lt);
+  EXPECT_EQ(map.visual().lastRetrieval().selected, got.size());
   // Per cell, the nearer of the two maps' winners: add a local point at depth 3 m next to a
   // long-term winner (12 px away), then it wins that cell.
   const VisualPoint* lt_point = nullptr;
   for (VisualPoint* p : got)
-    if (map.isLongterm(*p)) lt_point = p;
+    if (map.visual().isLongterm(*p)) lt_point = p;
   ASSERT_NE(lt_point, nullptr);
   Vec2 lt_px;
   ASSERT_TRUE(cam->project(T_wc.inverse() * lt_point->p_world, lt_px));
   const Vec2 near_px = lt_px + Vec2(12, 0);
   const Vec3 near = T_wc * Vec3((near_px.x() - cc.cx) / cc.fx * 3.0, (near_px.y() - cc.cy) / cc.fy * 3.0, 3.0);
-  ASSERT_TRUE(map.localVisual().insert(visualPoint(100000, near)));
+  ASSERT_TRUE(map.visual().local().insert(visualPoint(100000, near)));
   scan.push_back(near);
   const std::int64_t lt_id = lt_point->id;
-  const std::vector<VisualPoint*> got2 = map.pointsInView(*cam, T_wc, scan);
+  const std::vector<VisualPoint*> got2 = map.visual().pointsInView(*cam, T_wc, scan);
   ASSERT_EQ(got2.size(), got.size());
   bool found_near = false, found_lt = false;
   for (VisualPoint* p : got2) {
@@ -425,12 +425,12 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   // Photometric outliers are removed from the map that holds them.
   VisualPoint* victim = nullptr;
   for (VisualPoint* p : got2)
-    if (map.isLongterm(*p)) victim = p;
+    if (map.visual().isLongterm(*p)) victim = p;
   ASSERT_NE(victim, nullptr);
   const std::int64_t victim_id = victim->id;
-  for (int i = 0; i <= map.localVisual().config().max_bad_updates; ++i) map.reportPhotometricError(*victim, 1e6, 1.0);
-  EXPECT_EQ(map.removeBadPoints(), 1u);
-  EXPECT_EQ(map.longtermVisual().find(victim_id), nullptr);
+  for (int i = 0; i <= map.visual().local().config().max_bad_updates; ++i) map.visual().reportPhotometricError(*victim, 1e6, 1.0);
+  EXPECT_EQ(map.visual().removeBadPoints(), 1u);
+  EXPECT_EQ(map.visual().longterm().find(victim_id), nullptr);
 }
 
 TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
@@ -443,9 +443,9 @@ TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
   const MapUpdateReport rep = map.update(Vec3(10, 0, 0));  // no work left: counts after nothing changed
   ASSERT_TRUE(rep.recounted);
   const HybridMapStats s = map.stats();
-  EXPECT_EQ(s.bytes_lidar, map.lidarMap().bytes());
-  EXPECT_EQ(s.bytes_visual_local, map.localVisual().bytes() + map.localVisual().scratchBytes());
-  EXPECT_EQ(s.bytes_visual_longterm, map.longtermVisual().bytes() + map.longtermVisual().scratchBytes());
+  EXPECT_EQ(s.bytes_lidar, map.lidar().voxels().bytes());
+  EXPECT_EQ(s.bytes_visual_local, map.visual().local().bytes() + map.visual().local().scratchBytes());
+  EXPECT_EQ(s.bytes_visual_longterm, map.visual().longterm().bytes() + map.visual().longterm().scratchBytes());
   EXPECT_EQ(s.bytes, s.bytes_lidar + s.bytes_visual_local + s.bytes_visual_longterm + s.bytes_index);
   EXPECT_EQ(s.bytes, map.bytes());
   EXPECT_GT(s.bytes_index, 0u);

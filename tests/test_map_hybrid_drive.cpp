@@ -39,8 +39,8 @@ DriveResult drive(MapMode mode, double cap_mb, int steps, int every) {
     std::vector<PointWithCov> pts;
     groundPatch(pts, x + 40, x + 42, -1, 1, 0.2, 0.5, rng);
     wallPatch(pts, x + 40, x + 42, 2.1, 0, 1, 0.5, rng);
-    map.insertLidar(pts);
-    for (int i = 0; i < 3; ++i) map.localVisual().insert(visualPoint(id++, Vec3(x + 40 + u(rng), 2.05, 0.2 + 0.3 * i)));
+    map.lidar().insert(pts);
+    for (int i = 0; i < 3; ++i) map.visual().local().insert(visualPoint(id++, Vec3(x + 40 + u(rng), 2.05, 0.2 + 0.3 * i)));
     const MapUpdateReport rep = map.update(Vec3(x, 0, 0));
     out.max_report_bytes = std::max(out.max_report_bytes, rep.bytes);
     if ((step + 1) % every == 0) out.bytes.push_back(map.stats().bytes);
@@ -94,7 +94,7 @@ TEST(HybridMap, SlideTimeOnALargeStreetMap) {
     HybridMapConfig cfg;
     cfg.max_removals_per_update = budget;
     HybridMap map(cfg, VoxelMapConfig{}, VisualMapConfig{});
-    map.insertLidar(pts);
+    map.lidar().insert(pts);
     double worst_first = 0.0, worst_slide = 0.0;
     int updates = 0;
     // First update at x = 130: the 200 m cube drops 30 m at each end; then a 20 m slide to x = 150.
@@ -105,7 +105,7 @@ TEST(HybridMap, SlideTimeOnALargeStreetMap) {
       }
       if (r.pending == 0) break;
     }
-    const std::size_t before = map.lidarMap().numRootVoxels();
+    const std::size_t before = map.lidar().voxels().numRootVoxels();
     for (MapUpdateReport r = map.update(Vec3(150, 0, 0));; r = map.update(Vec3(150, 0, 0))) {
       worst_slide = std::max(worst_slide, r.ms);
       ++updates;

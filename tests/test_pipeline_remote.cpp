@@ -125,7 +125,7 @@ TEST_F(RemoteRoom, SameTrajectoryAsTheSingleProcess) {
   EXPECT_LE(std::abs(ate_remote - ate_single), 3e-5);
   EXPECT_LE(ate_remote, 0.013);
   // The map server holds what the single process would: visual points were created remotely.
-  EXPECT_GT(service.map().localVisual().size() + service.map().longtermVisual().size(), 100u);
+  EXPECT_GT(service.map().visual().local().size() + service.map().visual().longterm().size(), 100u);
   EXPECT_GT(service.counters().visual_upserts, 100u);
 }
 
@@ -165,8 +165,8 @@ TEST_F(RemoteRoom, MapFileReloadsToTheSameAnswers) {
   EXPECT_GE(reloaded.map().stats().bytes_lidar, service.map().stats().bytes_lidar * 8 / 10);
   // A query over every root voxel answers the same planes and visual points.
   MapQuery q;
-  service.map().lidarMap().forEachRoot([&q](const VoxelKey& k) { q.keys.push_back(k); });
-  service.map().localVisual().forEach([&](const VisualPoint& p) { q.visual_keys.push_back(service.map().localVisual().keyOf(p.p_world)); });
+  service.map().lidar().voxels().forEachRoot([&q](const VoxelKey& k) { q.keys.push_back(k); });
+  service.map().visual().local().forEach([&](const VisualPoint& p) { q.visual_keys.push_back(service.map().visual().local().keyOf(p.p_world)); });
   q.want_visual = true;
   const Submap a = service.answer(q), b = reloaded.answer(q);
   ASSERT_EQ(a.planes.size(), b.planes.size());
@@ -192,7 +192,7 @@ TEST_F(RemoteRoom, MapFileReloadsToTheSameAnswers) {
     EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
-  EXPECT_EQ(broken.map().lidarMap().numRootVoxels(), 0u);
+  EXPECT_EQ(broken.map().lidar().voxels().numRootVoxels(), 0u);
   std::ofstream(path, std::ios::binary | std::ios::trunc) << "not a map";
   EXPECT_THROW(loadMap(path, broken.map()), std::runtime_error);
   std::filesystem::remove(path);

@@ -259,8 +259,8 @@ std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seeds(const std::
       p.cov_world = Mat3::Identity() * 1e-4;
       pts.push_back(p);
     }
-    map.insertLidar(pts);
-    map.upsertVisualPoint(seedPoint());
+    map.lidar().insert(pts);
+    map.visual().upsert(seedPoint());
     std::ostringstream os;
     saveMap(os, map);
     const std::string t = os.str();

@@ -1,9 +1,9 @@
-// Binary map files (map_file.hpp) and the save/load members of OctreeNode, VoxelMap and HybridMap.
+// Binary map files (map_file.hpp): the file header, the hybrid map's content (the LiDAR map, whose
+// encoding is in map_file_lidar.cpp, then both visual maps) and the visual points' encoding.
 #include "livo/map/map_file.hpp"
 
-#include "octree_node.hpp"
+#include "map_file_codec.hpp"
 
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -11,47 +11,17 @@
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
-#include <type_traits>
 
 namespace livo {
+
+using namespace map_codec;
+
 namespace {
 
 constexpr char kMagic[8] = {'L', 'I', 'V', 'O', 'M', 'A', 'P', '1'};
 constexpr std::uint32_t kVersion = 1;
-constexpr std::uint64_t kMaxRoots = 100'000'000;
 constexpr std::uint64_t kMaxVisualPoints = 50'000'000;
 constexpr std::uint32_t kMaxObservations = 10'000;
-
-template <class T>
-void put(std::ostream& os, const T& v) {
-  static_assert(std::is_trivially_copyable<T>::value, "POD only");
-  os.write(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-
-template <class T>
-T get(std::istream& is, const char* what) {
-  static_assert(std::is_trivially_copyable<T>::value, "POD only");
-  T v;
-  if (!is.read(reinterpret_cast<char*>(&v), sizeof(T)))
-    throw std::runtime_error(std::string("truncated while reading ") + what);
-  return v;
-}
-
-void putVec(std::ostream& os, const Eigen::Ref<const Eigen::VectorXd>& v) {
-  for (Eigen::Index i = 0; i < v.size(); ++i) put(os, v[i]);
-}
-
-double getFinite(std::istream& is, const char* what) {
-  const double v = get<double>(is, what);
-  if (!std::isfinite(v)) throw std::runtime_error(std::string("non-finite ") + what);
-  return v;
-}
-
-Vec3 getVec3(std::istream& is, const char* what) {
-  Vec3 v;
-  for (int i = 0; i < 3; ++i) v[i] = getFinite(is, what);
-  return v;
-}
 
 void putPose(std::ostream& os, const Pose& T) {
   const Eigen::Quaterniond q(T.linear());
@@ -69,33 +39,6 @@ Pose getPose(std::istream& is) {
   T.linear() = quat.normalized().toRotationMatrix();
   T.translation() = t;
   return T;
-}
-
-void putPlane(std::ostream& os, const Plane& p) {
-  putVec(os, p.center);
-  putVec(os, p.normal);
-  put(os, p.d);
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) put(os, p.cov_nq(r, c));
-  put(os, p.radius); put(os, p.eig_min); put(os, p.eig_mid); put(os, p.eig_max);
-  put(os, std::int32_t(p.num_points)); put(os, std::int32_t(p.layer)); put(os, std::uint8_t(p.is_plane));
-}
-
-Plane getPlane(std::istream& is) {
-  Plane p;
-  p.center = getVec3(is, "plane centre");
-  p.normal = getVec3(is, "plane normal");
-  p.d = getFinite(is, "plane offset");
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) p.cov_nq(r, c) = getFinite(is, "plane covariance");
-  p.radius = getFinite(is, "plane radius");
-  p.eig_min = getFinite(is, "plane eigenvalue");
-  p.eig_mid = getFinite(is, "plane eigenvalue");
-  p.eig_max = getFinite(is, "plane eigenvalue");
-  p.num_points = get<std::int32_t>(is, "plane point count");
-  p.layer = get<std::int32_t>(is, "plane layer");
-  p.is_plane = get<std::uint8_t>(is, "plane flag") != 0;
-  return p;
 }
 
 void putVisualPoint(std::ostream& os, const VisualPoint& p) {
@@ -161,106 +104,29 @@ std::size_t loadVisual(std::istream& is, VisualMap& m) {
 
 }  // namespace
 
-// ---- OctreeNode ----
-void OctreeNode::save(std::ostream& os) const {
-  putVec(os, center_);
-  put(os, layer_); put(os, std::uint8_t(state_)); put(os, std::uint8_t(update_enabled_)); put(os, new_points_);
-  put(os, std::uint32_t(points_.size()));
-  for (const MapPoint& p : points_) {
-    putVec(os, p.p_world);
-    put(os, p.cov_upper);
-  }
-  put(os, std::uint8_t(plane_ != nullptr));
-  if (plane_) putPlane(os, *plane_);
-  std::uint8_t mask = 0;
-  if (children_)
-    for (std::size_t i = 0; i < 8; ++i)
-      if ((*children_)[i]) mask |= std::uint8_t(1u << i);
-  put(os, std::uint8_t(children_ != nullptr)); put(os, mask);
-  if (children_)
-    for (const auto& c : *children_)
-      if (c) c->save(os);
+// ---- HybridMap content: the LiDAR map, then the local and the long-term visual map ----
+namespace {
+void saveContent(std::ostream& os, const HybridMap& map) {
+  map.lidar().voxels().save(os);
+  saveVisual(os, map.visual().local());
+  saveVisual(os, map.visual().longterm());
 }
 
-std::unique_ptr<OctreeNode> OctreeNode::load(std::istream& is, const LoadLimits& limits, int layer) {
-  const Vec3 center = getVec3(is, "node centre");
-  const auto stored_layer = get<std::uint8_t>(is, "node layer");
-  if (int(stored_layer) != layer) throw std::runtime_error("node layer " + std::to_string(stored_layer) + " at depth " + std::to_string(layer));
-  auto node = std::make_unique<OctreeNode>(center, layer);
-  const auto state = get<std::uint8_t>(is, "node state");
-  if (state > std::uint8_t(State::Split)) throw std::runtime_error("node state " + std::to_string(state));
-  node->state_ = State(state);
-  node->update_enabled_ = get<std::uint8_t>(is, "node update flag") != 0;
-  node->new_points_ = get<std::uint16_t>(is, "node new points");
-  const auto n = get<std::uint32_t>(is, "node point count");
-  if (n > limits.max_points) throw std::runtime_error("node point count " + std::to_string(n) + " over the limit");
-  node->points_.resize(n);
-  for (MapPoint& p : node->points_) {
-    p.p_world = getVec3(is, "map point");
-    p.cov_upper = get<std::array<float, 6>>(is, "map point covariance");
-  }
-  if (get<std::uint8_t>(is, "plane flag")) node->plane_ = std::make_unique<Plane>(getPlane(is));
-  const bool has_children = get<std::uint8_t>(is, "children flag") != 0;
-  const auto mask = get<std::uint8_t>(is, "children mask");
-  if (has_children) {
-    if (layer >= limits.max_layer) throw std::runtime_error("octree deeper than max_layer");
-    node->children_ = std::make_unique<Children>();
-    for (std::size_t i = 0; i < 8; ++i)
-      if (mask & (1u << i)) (*node->children_)[i] = load(is, limits, layer + 1);
-  }
-  return node;
-}
-
-// ---- VoxelMap ----
-void VoxelMap::save(std::ostream& os) const {
-  put(os, std::uint64_t(roots_.size()));
-  for (const auto& kv : roots_) {
-    put(os, kv.first.x); put(os, kv.first.y); put(os, kv.first.z);
-    kv.second->save(os);
-  }
-}
-
-void VoxelMap::load(std::istream& is) {
-  clear();
+// Counters, cube centres and pending slide work are not part of it: the first update() after loading
+// centres the cubes at the robot again (and, with a cap, makes an exact byte count).
+void loadContent(std::istream& is, HybridMap& map) {
+  map.clear();
   try {
-    const auto n = get<std::uint64_t>(is, "root voxel count");
-    if (n > kMaxRoots) throw std::runtime_error("root voxel count " + std::to_string(n) + " over the limit");
-    OctreeNode::LoadLimits lim;
-    lim.max_layer = config_.max_layer;
-    lim.max_points = std::size_t(std::max(config_.max_points, 1)) * 2 + 1024;
-    for (std::uint64_t i = 0; i < n; ++i) {
-      VoxelKey k;
-      k.x = get<std::int64_t>(is, "voxel key");
-      k.y = get<std::int64_t>(is, "voxel key");
-      k.z = get<std::int64_t>(is, "voxel key");
-      if (!roots_.emplace(k, OctreeNode::load(is, lim, 0)).second) throw std::runtime_error("duplicate root voxel");
-    }
+    map.lidar().load(is);
+    loadVisual(is, map.visual().local());
+    loadVisual(is, map.visual().longterm());
   } catch (...) {
-    clear();
+    map.clear();
     throw;
   }
+  map.requestExactCount();
 }
-
-// ---- HybridMap ----
-void HybridMap::save(std::ostream& os) const {
-  lidar_.save(os);
-  saveVisual(os, local_visual_);
-  saveVisual(os, longterm_visual_);
-}
-
-void HybridMap::load(std::istream& is) {
-  clear();
-  try {
-    lidar_.load(is);
-    lidar_.forEachRoot([this](const VoxelKey& k) { tiles_.add(k); });
-    loadVisual(is, local_visual_);
-    loadVisual(is, longterm_visual_);
-  } catch (...) {
-    clear();
-    throw;
-  }
-  calibrated_ = false;  // the next update() makes an exact count
-}
+}  // namespace
 
 // ---- files ----
 std::string MapFileInfo::describe() const {
@@ -274,10 +140,10 @@ std::string MapFileInfo::describe() const {
 namespace {
 MapFileInfo infoOf(const HybridMap& map, std::size_t bytes) {
   MapFileInfo info;
-  info.root_voxels = map.lidarMap().numRootVoxels();
-  info.planes = map.lidarMap().numPlanes();
-  info.visual_points_local = map.localVisual().size();
-  info.visual_points_longterm = map.longtermVisual().size();
+  info.root_voxels = map.lidar().voxels().numRootVoxels();
+  info.planes = map.lidar().voxels().numPlanes();
+  info.visual_points_local = map.visual().local().size();
+  info.visual_points_longterm = map.visual().longterm().size();
   info.file_bytes = bytes;
   return info;
 }
@@ -308,11 +174,12 @@ MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
       throw std::runtime_error("version " + std::to_string(version) + ", this build reads " + std::to_string(kVersion));
     const double vs = get<double>(is, "voxel size");
     const double vvs = get<double>(is, "visual voxel size");
-    if (vs != map.lidarMap().config().voxel_size_m || vvs != map.localVisual().config().voxel_size_m)
+    const double cfg_vs = map.lidar().voxels().config().voxel_size_m;
+    const double cfg_vvs = map.visual().local().config().voxel_size_m;
+    if (vs != cfg_vs || vvs != cfg_vvs)
       throw std::runtime_error("written with voxel sizes " + std::to_string(vs) + " / " + std::to_string(vvs) +
-                               " m, configured " + std::to_string(map.lidarMap().config().voxel_size_m) + " / " +
-                               std::to_string(map.localVisual().config().voxel_size_m) + " m");
-    map.load(is);
+                               " m, configured " + std::to_string(cfg_vs) + " / " + std::to_string(cfg_vvs) + " m");
+    loadContent(is, map);
     if (is.peek() != std::char_traits<char>::eof()) throw std::runtime_error("trailing bytes after the map");
   } catch (const std::exception& e) {
     map.clear();
@@ -332,9 +199,9 @@ MapFileInfo loadMap(const std::string& path, HybridMap& map) {
 MapFileInfo saveMap(std::ostream& os, const HybridMap& map) {
   os.write(kMagic, sizeof(kMagic));
   put(os, kVersion);
-  put(os, map.lidarMap().config().voxel_size_m);
-  put(os, map.localVisual().config().voxel_size_m);
-  map.save(os);
+  put(os, map.lidar().voxels().config().voxel_size_m);
+  put(os, map.visual().local().config().voxel_size_m);
+  saveContent(os, map);
   return infoOf(map, 0);
 }
 

@@ -16,13 +16,13 @@ Submap MapService::answer(const MapQuery& q) {
   Submap s;
   s.utime = q.utime;
   s.request_id = q.request_id;
-  s.voxel_size_m = map_.lidarMap().config().voxel_size_m;
+  s.voxel_size_m = map_.lidar().voxels().config().voxel_size_m;
   std::vector<VoxelKey> keys = q.keys;
   const auto less = [](const VoxelKey& a, const VoxelKey& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
   std::sort(keys.begin(), keys.end(), less);
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   for (const VoxelKey& k : keys) {
-    map_.lidarMap().forEachPlaneIn(k, [&](const Plane& plane, const std::array<std::int8_t, 3>& path) {
+    map_.lidar().voxels().forEachPlaneIn(k, [&](const Plane& plane, const std::array<std::int8_t, 3>& path) {
       SubmapPlane sp;
       sp.key = k;
       sp.layer = std::min(plane.layer, 3);
@@ -37,9 +37,9 @@ Submap MapService::answer(const MapQuery& q) {
     // Only points in front of the predicted camera can be selected (VisualMap::pointsInView needs
     // z >= min_depth_m): the others are not sent.
     const std::size_t first = s.visual_points.size();
-    map_.copyVisualPointsIn(q.visual_keys, s.visual_points);
+    map_.visual().copyPointsIn(q.visual_keys, s.visual_points);
     const Pose T_camera_world = q.T_world_camera.inverse();
-    const double min_z = map_.localVisual().config().min_depth_m;
+    const double min_z = map_.visual().local().config().min_depth_m;
     const double max_z = q.max_visual_depth_m > 0 ? q.max_visual_depth_m : std::numeric_limits<double>::infinity();
     const auto behind = [&](const VisualPoint& p) {
       const double z = (T_camera_world * p.p_world).z();
@@ -49,7 +49,7 @@ Submap MapService::answer(const MapQuery& q) {
                           s.visual_points.end());
     ++counters_.visual_queries;
   }
-  s.next_visual_point_id = map_.nextVisualPointId();
+  s.next_visual_point_id = map_.visual().nextId();
   ++counters_.queries;
   return s;
 }
@@ -59,19 +59,19 @@ MapUpdateReport MapService::apply(const MapUpdate& u) {
   latest_ = std::max(latest_, u.utime);
   if (u.utime < latest_update_) ++counters_.stale_updates;
   latest_update_ = std::max(latest_update_, u.utime);
-  counters_.points_inserted += map_.insertLidar(u.points);
+  counters_.points_inserted += map_.lidar().insert(u.points);
   for (const VisualPoint& p : u.new_visual_points) {
     if (p.obs.empty()) {
-      map_.upsertVisualPoint(p);
+      map_.visual().upsert(p);
       ++counters_.visual_removals;
-    } else if (map_.upsertVisualPoint(p)) {
+    } else if (map_.visual().upsert(p)) {
       ++counters_.visual_upserts;
     } else {
       ++counters_.visual_rejected;
     }
   }
   for (const auto& ob : u.observations) {
-    if (map_.appendObservation(ob.first, ob.second))
+    if (map_.visual().appendObservation(ob.first, ob.second, &map_.lidar().voxels()))
       ++counters_.observations_added;
     else
       ++counters_.observations_unknown;
@@ -88,7 +88,7 @@ MapStats MapService::stats() const {
   MapStats s;
   s.utime = latest_;
   s.local_voxels = std::int64_t(h.local_voxels);
-  s.local_planes = std::int64_t(map_.lidarMap().numPlanes());
+  s.local_planes = std::int64_t(map_.lidar().voxels().numPlanes());
   s.visual_points_local = std::int64_t(h.visual_points_local);
   s.visual_points_longterm = std::int64_t(h.visual_points_longterm);
   s.bytes = std::int64_t(h.bytes);

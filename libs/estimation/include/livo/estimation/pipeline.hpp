@@ -37,7 +37,7 @@ class Pipeline {
   /// The camera model at the processing scale (null without a camera).
   const CameraModel* camera() const { return frames_.camera(); }
   /// The local visual map (hybrid mode) or the only one (global mode).
-  const VisualMap& visualMap() const { return map_->localVisual(); }
+  const VisualMap& visualMap() const { return map_->visual().local(); }
   /// The whole map: LiDAR map, local and long-term visual maps, counters.
   const HybridMap& map() const { return *map_; }
   /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json

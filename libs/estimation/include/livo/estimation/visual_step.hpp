@@ -59,10 +59,13 @@ class VisualOpsOn : public VisualMapOps {
 };
 
 /// On a HybridMap: both visual maps, refinement against its LiDAR map.
-class HybridVisualOps final : public VisualOpsOn<HybridMap> {
+class HybridVisualOps final : public VisualOpsOn<DualVisualMap> {
  public:
-  using VisualOpsOn::VisualOpsOn;
-  void refine(VisualPoint& p) override { map_.refine(p); }
+  explicit HybridVisualOps(HybridMap& map) : VisualOpsOn(map.visual()), planes_(&map.lidar().voxels()) {}
+  void refine(VisualPoint& p) override { map_.refine(p, planes_); }
+
+ private:
+  const PlaneFinder* planes_;
 };
 
 /// On one VisualMap, refining normals against `planes` (may be null).

@@ -6,7 +6,8 @@
 // size, f64 visual voxel size, then the LiDAR map (u64 root count, per root 3 x i64 key + octree
 // nodes depth first) and the two visual maps (u64 count, per point its fields and observations).
 // Every count is checked against the remaining limits before anything is allocated; a file written
-// with other voxel sizes is refused (its keys would not match).
+// with other voxel sizes is refused (its keys would not match). Counters, cube centres and pending
+// slide work are not saved: the first update() after loading centres the cubes at the robot again.
 #pragma once
 
 #include "livo/map/hybrid_map.hpp"
