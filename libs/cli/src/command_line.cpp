@@ -222,21 +222,46 @@ std::string CommandLine::hint() const {
   return "try '" + c->program_ + " --help'";
 }
 
+// One level of the line from args[first]: options and positionals, or options and a sub-command.
 void CommandLine::parseArgs(const std::vector<std::string>& args, std::size_t first, std::ostream& out,
                             Outcome& outcome) {
-  // --help / -h / --version anywhere on this level win over errors elsewhere on the line.
+  if (printHelpOrVersion(args, first, out, outcome)) return;
+  std::size_t next_positional = 0;
+  bool only_positional = false;  // after "--"
+  for (std::size_t i = first; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (!only_positional && arg == "--") {
+      only_positional = true;
+      continue;
+    }
+    if (!only_positional && arg.size() > 1 && arg[0] == '-') {
+      i = parseOption(args, i);
+      continue;
+    }
+    if (!commands_.empty()) {  // the rest of the line belongs to the sub-command
+      parseCommand(args, i, out, outcome);
+      return;
+    }
+    parsePositional(next_positional++, arg);
+  }
+  if (!commands_.empty()) throw UsageError("missing command (" + commandNames() + ")");
+  checkRequired();
+}
+
+bool CommandLine::printHelpOrVersion(const std::vector<std::string>& args, std::size_t first, std::ostream& out,
+                                     Outcome& outcome) const {
   for (std::size_t j = first; j < args.size(); ++j) {
     const std::string& a = args[j];
     if (a == "--") break;
     if (a == "--help" || a == "-h") {
       out << help();
       outcome = Outcome::kHelp;
-      return;
+      return true;
     }
     if (a == "--version") {
       out << rootProgram() << " " << projectVersion() << "\n";
       outcome = Outcome::kVersion;
-      return;
+      return true;
     }
     if (a.size() > 1 && a[0] == '-') {
       const Option* o = find(a);
@@ -245,70 +270,65 @@ void CommandLine::parseArgs(const std::vector<std::string>& args, std::size_t fi
       break;  // the rest of the line belongs to the sub-command
     }
   }
+  return false;
+}
 
-  std::size_t next_positional = 0;
-  bool only_positional = false;
-  for (std::size_t i = first; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (!only_positional && arg == "--") {
-      only_positional = true;
-      continue;
-    }
-    if (!only_positional && arg.size() > 1 && arg[0] == '-') {
-      std::string name = arg, value;
-      const auto eq = arg.find('=');
-      const bool inline_value = arg.rfind("--", 0) == 0 && eq != std::string::npos;
-      if (inline_value) name = arg.substr(0, eq), value = arg.substr(eq + 1);
-      Option* o = find(name);
-      if (!o) {
-        std::string owners;
-        if (parent_)
-          for (const auto& [n, c] : parent_->commands_)
-            if (c.get() != this && c->find(name)) owners += (owners.empty() ? "" : ", ") + n;
-        throw UsageError("unknown option '" + name + "'" +
-                         (owners.empty() ? "" : " (an option of " + owners + ", not of " + program_ + ")"));
+std::size_t CommandLine::parseOption(const std::vector<std::string>& args, std::size_t i) {
+  const std::string& arg = args[i];
+  std::string name = arg, value;
+  const auto eq = arg.find('=');
+  const bool inline_value = arg.rfind("--", 0) == 0 && eq != std::string::npos;
+  if (inline_value) name = arg.substr(0, eq), value = arg.substr(eq + 1);
+  Option* o = find(name);
+  if (!o) throw UsageError(unknownOptionMessage(name));
+  if (o->kind == Option::Kind::kFlag) {
+    if (inline_value) throw UsageError(name + ": takes no value, got '" + value + "'");
+    o->set_flag();
+  } else {
+    if (!inline_value) {
+      if (i + 1 >= args.size()) {
+        const std::string what = o->kind == Option::Kind::kChoice ? joinChoices(o->choices) : o->metavar;
+        throw UsageError(name + ": missing value (" + what + ")");
       }
-      if (o->kind == Option::Kind::kFlag) {
-        if (inline_value) throw UsageError(name + ": takes no value, got '" + value + "'");
-        o->set_flag();
-      } else {
-        if (!inline_value) {
-          if (i + 1 >= args.size()) {
-            const std::string what = o->kind == Option::Kind::kChoice ? joinChoices(o->choices) : o->metavar;
-            throw UsageError(name + ": missing value (" + what + ")");
-          }
-          value = args[++i];
-        }
-        setValue(*o, value);
-      }
-      o->seen = true;
-      continue;
+      value = args[++i];
     }
-    if (!commands_.empty()) {
-      CommandLine* child = findCommand(arg);
-      if (!child) {
-        std::vector<std::string> names;
-        for (const auto& c : commands_) names.push_back(c.first);
-        throw UsageError("unknown command '" + arg + "' (expected " + joinChoices(names) + ")");
-      }
-      chosen_ = arg;
-      child->parseArgs(args, i + 1, out, outcome);
-      return;
-    }
-    Option* pos = nullptr;
-    for (std::size_t k = 0, n = 0; k < options_.size() && !pos; ++k)
-      if (options_[k]->kind == Option::Kind::kPositional && n++ == next_positional) pos = options_[k].get();
-    if (!pos) throw UsageError("unexpected argument '" + arg + "'");
-    ++next_positional;
-    setValue(*pos, arg);
-    pos->seen = true;
+    setValue(*o, value);
   }
-  if (!commands_.empty()) {
-    std::vector<std::string> names;
-    for (const auto& c : commands_) names.push_back(c.first);
-    throw UsageError("missing command (" + joinChoices(names) + ")");
-  }
-  checkRequired();
+  o->seen = true;
+  return i;
+}
+
+std::string CommandLine::unknownOptionMessage(const std::string& name) const {
+  // Names the sibling sub-commands that do take the option.
+  std::string owners;
+  if (parent_)
+    for (const auto& [n, c] : parent_->commands_)
+      if (c.get() != this && c->find(name)) owners += (owners.empty() ? "" : ", ") + n;
+  return "unknown option '" + name + "'" +
+         (owners.empty() ? "" : " (an option of " + owners + ", not of " + program_ + ")");
+}
+
+void CommandLine::parseCommand(const std::vector<std::string>& args, std::size_t i, std::ostream& out,
+                               Outcome& outcome) {
+  CommandLine* child = findCommand(args[i]);
+  if (!child) throw UsageError("unknown command '" + args[i] + "' (expected " + commandNames() + ")");
+  chosen_ = args[i];
+  child->parseArgs(args, i + 1, out, outcome);
+}
+
+void CommandLine::parsePositional(std::size_t index, const std::string& arg) {
+  Option* pos = nullptr;
+  for (std::size_t k = 0, n = 0; k < options_.size() && !pos; ++k)
+    if (options_[k]->kind == Option::Kind::kPositional && n++ == index) pos = options_[k].get();
+  if (!pos) throw UsageError("unexpected argument '" + arg + "'");
+  setValue(*pos, arg);
+  pos->seen = true;
+}
+
+std::string CommandLine::commandNames() const {
+  std::vector<std::string> names;
+  for (const auto& c : commands_) names.push_back(c.first);
+  return joinChoices(names);
 }
 
 void CommandLine::setValue(Option& o, const std::string& v) {
@@ -368,11 +388,7 @@ void CommandLine::checkRequired() const {
 
 std::string CommandLine::usageLine() const {
   std::string s = "usage: " + program_;
-  if (!commands_.empty()) {
-    std::vector<std::string> names;
-    for (const auto& c : commands_) names.push_back(c.first);
-    return s + " " + joinChoices(names) + " ARGS [options]";
-  }
+  if (!commands_.empty()) return s + " " + commandNames() + " ARGS [options]";
   bool optional_options = false;
   for (const auto& o : options_) {
     if (o->kind == Option::Kind::kPositional) s += o->is_required && o->required_unless.empty() ? " " + o->metavar

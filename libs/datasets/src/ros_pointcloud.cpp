@@ -102,118 +102,169 @@ void applyPointTimes(DecodedScan& out, const std::vector<std::int64_t>& t_ns) {
     scan.points[i].time_offset_s = static_cast<float>(static_cast<double>(t_ns[i] - start_ns) * 1e-9);
 }
 
-}  // namespace
+/// The fields of a PointCloud2 message, read and checked against the message length.
+struct CloudMessage {
+  std::int64_t header_ns = 0;
+  std::uint32_t height = 0, width = 0;
+  std::vector<Field> fields;
+  bool big_endian = false;
+  std::uint32_t point_step = 0, row_step = 0;
+  std::uint32_t data_len = 0;
+  const std::uint8_t* data = nullptr;
 
-DecodedScan decodeRosPointCloud2(const std::uint8_t* data, std::size_t size, const RosDecodeOptions& opt) {
-  RosBuffer b(data, size, "sensor_msgs/PointCloud2");
-  DecodedScan out;
-  out.scan.sensor = opt.sensor;
-  const std::int64_t header_ns = b.header();
-  out.header_utime = nsToUtimeRound(header_ns);
-  const auto height = b.get<std::uint32_t>("height");
-  const auto width = b.get<std::uint32_t>("width");
+  std::uint64_t points() const { return static_cast<std::uint64_t>(width) * height; }
+};
+
+CloudMessage readCloudMessage(RosBuffer& b) {
+  CloudMessage m;
+  m.header_ns = b.header();
+  m.height = b.get<std::uint32_t>("height");
+  m.width = b.get<std::uint32_t>("width");
   // PointField: name (>= 4 bytes), offset uint32, datatype uint8, count uint32.
   const std::uint32_t nfields = b.count("fields", 4 + 4 + 1 + 4);
-  std::vector<Field> fields(nfields);
-  for (auto& f : fields) {
+  m.fields.resize(nfields);
+  for (auto& f : m.fields) {
     f.name = b.string("fields.name");
     f.offset = b.get<std::uint32_t>("fields.offset");
     f.datatype = b.get<std::uint8_t>("fields.datatype");
     f.count = b.get<std::uint32_t>("fields.count");
   }
-  const bool big_endian = b.get<std::uint8_t>("is_bigendian") != 0;
-  const auto point_step = b.get<std::uint32_t>("point_step");
-  const auto row_step = b.get<std::uint32_t>("row_step");
-  std::uint32_t data_len = 0;
-  const std::uint8_t* cloud = b.bytes("data", data_len);
+  m.big_endian = b.get<std::uint8_t>("is_bigendian") != 0;
+  m.point_step = b.get<std::uint32_t>("point_step");
+  m.row_step = b.get<std::uint32_t>("row_step");
+  m.data = b.bytes("data", m.data_len);
   b.get<std::uint8_t>("is_dense");
   b.finish();
+  return m;
+}
 
-  // Layout checks: every used field inside the point record, every row inside the data.
-  const std::uint64_t npoints = static_cast<std::uint64_t>(width) * height;
-  if (npoints > 0) {
-    if (static_cast<std::uint64_t>(width) * point_step > row_step)
-      b.fail("row_step", std::to_string(row_step) + " is smaller than width * point_step = " +
-                             std::to_string(static_cast<std::uint64_t>(width) * point_step));
-    if (static_cast<std::uint64_t>(row_step) * height > data_len)
-      b.fail("data", "holds " + std::to_string(data_len) + " bytes but height * row_step = " +
-                         std::to_string(static_cast<std::uint64_t>(row_step) * height));
+/// Every row inside the data, every point inside its row.
+void checkRowLayout(const RosBuffer& b, const CloudMessage& m) {
+  if (m.points() == 0) return;
+  if (static_cast<std::uint64_t>(m.width) * m.point_step > m.row_step)
+    b.fail("row_step", std::to_string(m.row_step) + " is smaller than width * point_step = " +
+                           std::to_string(static_cast<std::uint64_t>(m.width) * m.point_step));
+  if (static_cast<std::uint64_t>(m.row_step) * m.height > m.data_len)
+    b.fail("data", "holds " + std::to_string(m.data_len) + " bytes but height * row_step = " +
+                       std::to_string(static_cast<std::uint64_t>(m.row_step) * m.height));
+}
+
+/// Reader of the field `name`, checked to fit in the point record; invalid when absent and not `required`.
+FieldReader fieldReader(const RosBuffer& b, const CloudMessage& m, const char* name, bool required) {
+  const Field* f = findField(m.fields, name);
+  if (!f) {
+    if (required) b.fail("fields", std::string("no '") + name + "' field (fields: " + fieldList(m.fields) + ")");
+    return {};
   }
-  auto reader = [&](const char* name, bool required) -> FieldReader {
-    const Field* f = findField(fields, name);
-    if (!f) {
-      if (required) b.fail("fields", std::string("no '") + name + "' field (fields: " + fieldList(fields) + ")");
-      return {};
-    }
-    const int nb = fieldBytes(f->datatype);
-    if (nb == 0) b.fail("fields", std::string("field '") + name + "' has unknown datatype " + std::to_string(f->datatype));
-    if (static_cast<std::uint64_t>(f->offset) + nb > point_step)
-      b.fail("fields", std::string("field '") + name + "' (offset " + std::to_string(f->offset) + ", " +
-                           std::to_string(nb) + " bytes) does not fit in point_step " + std::to_string(point_step));
-    return FieldReader(*f, big_endian);
-  };
-  const FieldReader rx = reader("x", true), ry = reader("y", true), rz = reader("z", true);
-  for (const char* axis : {"x", "y", "z"})
-    if (!isFloat(findField(fields, axis)->datatype))
-      b.fail("fields", std::string("coordinate '") + axis + "' is not float32/float64");
-  FieldReader ri = findField(fields, "intensity") ? reader("intensity", false) : reader("reflectivity", false);
-  FieldReader rr = findField(fields, "ring") ? reader("ring", false) : reader("line", false);
+  const int nb = fieldBytes(f->datatype);
+  if (nb == 0)
+    b.fail("fields", std::string("field '") + name + "' has unknown datatype " + std::to_string(f->datatype));
+  if (static_cast<std::uint64_t>(f->offset) + nb > m.point_step)
+    b.fail("fields", std::string("field '") + name + "' (offset " + std::to_string(f->offset) + ", " +
+                         std::to_string(nb) + " bytes) does not fit in point_step " + std::to_string(m.point_step));
+  return FieldReader(*f, m.big_endian);
+}
 
-  // Per-point time field (ros_msgs.hpp): named, none, or the first present of the usual names.
+/// Per-point time field (ros_msgs.hpp): named, none, or the first present of the usual names.
+const Field* pointTimeField(const RosBuffer& b, const CloudMessage& m, const std::string& wanted) {
   const Field* tf = nullptr;
-  if (opt.point_time_field.empty()) {
+  if (wanted.empty()) {
     for (const char* name : {"time", "t", "timestamp", "offset_time"})
-      if ((tf = findField(fields, name))) break;
-  } else if (opt.point_time_field != "none") {
-    tf = findField(fields, opt.point_time_field.c_str());
-    if (!tf)
-      b.fail("fields", "no point time field '" + opt.point_time_field + "' (fields: " + fieldList(fields) + ")");
+      if ((tf = findField(m.fields, name))) break;
+  } else if (wanted != "none") {
+    tf = findField(m.fields, wanted.c_str());
+    if (!tf) b.fail("fields", "no point time field '" + wanted + "' (fields: " + fieldList(m.fields) + ")");
   }
-  FieldReader rt;
-  if (tf) {
-    rt = reader(tf->name.c_str(), true);
-    out.time_field = tf->name;
-  }
+  return tf;
+}
 
-  // Points in message order; rows of an organized cloud one after the other.
-  out.scan.points.reserve(static_cast<std::size_t>(npoints));
-  std::vector<double> raw_t;
-  raw_t.reserve(tf ? static_cast<std::size_t>(npoints) : 0);
+/// Readers of the fields a LidarPoint takes; `time_field` is null when the points carry no time.
+struct PointReaders {
+  FieldReader x, y, z, intensity, ring, time;
+  const Field* time_field = nullptr;
+};
+
+PointReaders pointReaders(const RosBuffer& b, const CloudMessage& m, const std::string& point_time_field) {
+  PointReaders r;
+  r.x = fieldReader(b, m, "x", true);
+  r.y = fieldReader(b, m, "y", true);
+  r.z = fieldReader(b, m, "z", true);
+  for (const char* axis : {"x", "y", "z"})
+    if (!isFloat(findField(m.fields, axis)->datatype))
+      b.fail("fields", std::string("coordinate '") + axis + "' is not float32/float64");
+  r.intensity = findField(m.fields, "intensity") ? fieldReader(b, m, "intensity", false)
+                                                 : fieldReader(b, m, "reflectivity", false);
+  r.ring = findField(m.fields, "ring") ? fieldReader(b, m, "ring", false) : fieldReader(b, m, "line", false);
+  r.time_field = pointTimeField(b, m, point_time_field);
+  if (r.time_field) r.time = fieldReader(b, m, r.time_field->name.c_str(), true);
+  return r;
+}
+
+/// Points in message order (rows of an organized cloud one after the other) into out.scan, their raw
+/// time values into `raw_t`; returns the largest |raw time|.
+double readPoints(const RosBuffer& b, const CloudMessage& m, const PointReaders& rd, DecodedScan& out,
+                  std::vector<double>& raw_t) {
+  out.scan.points.reserve(static_cast<std::size_t>(m.points()));
+  raw_t.reserve(rd.time_field ? static_cast<std::size_t>(m.points()) : 0);
   double max_abs_t = 0;
-  for (std::uint32_t r = 0; r < height; ++r) {
-    const std::uint8_t* row = cloud + static_cast<std::size_t>(r) * row_step;
-    for (std::uint32_t c = 0; c < width; ++c) {
-      const std::uint8_t* p = row + static_cast<std::size_t>(c) * point_step;
+  for (std::uint32_t r = 0; r < m.height; ++r) {
+    const std::uint8_t* row = m.data + static_cast<std::size_t>(r) * m.row_step;
+    for (std::uint32_t c = 0; c < m.width; ++c) {
+      const std::uint8_t* p = row + static_cast<std::size_t>(c) * m.point_step;
       LidarPoint pt;
-      pt.p_lidar = Eigen::Vector3f(static_cast<float>(rx(p)), static_cast<float>(ry(p)), static_cast<float>(rz(p)));
+      pt.p_lidar =
+          Eigen::Vector3f(static_cast<float>(rd.x(p)), static_cast<float>(rd.y(p)), static_cast<float>(rd.z(p)));
       if (!pt.p_lidar.allFinite()) {
         ++out.dropped_nonfinite;
         continue;
       }
-      if (ri.valid()) pt.intensity = static_cast<float>(ri(p));
-      if (rr.valid()) pt.ring = toRing(rr(p));
-      if (tf) {
-        const double t = rt(p);
-        if (!std::isfinite(t)) b.fail("data", "point time '" + tf->name + "' is not finite");
+      if (rd.intensity.valid()) pt.intensity = static_cast<float>(rd.intensity(p));
+      if (rd.ring.valid()) pt.ring = toRing(rd.ring(p));
+      if (rd.time_field) {
+        const double t = rd.time(p);
+        if (!std::isfinite(t)) b.fail("data", "point time '" + rd.time_field->name + "' is not finite");
         raw_t.push_back(t);
         max_abs_t = std::max(max_abs_t, std::abs(t));
       }
       out.scan.points.push_back(pt);
     }
   }
+  return max_abs_t;
+}
 
-  // Point times in ns: integer fields are ns, floating fields s (ns from 1e15 on); absolute from 1e5 s on.
-  if (!tf) {  // no per-point times: utime = header.stamp, offsets 0
-    out.scan.utime = out.header_utime;
-    return out;
-  }
-  const bool in_ns = !isFloat(tf->datatype) || max_abs_t >= 1e15;
+/// Raw point times to ns: integer fields are ns, floating fields s (ns from 1e15 on); absolute from
+/// 1e5 s on, else relative to the header stamp.
+void applyRawPointTimes(DecodedScan& out, const Field& time_field, const std::vector<double>& raw_t,
+                        double max_abs_t, std::int64_t header_ns) {
+  const bool in_ns = !isFloat(time_field.datatype) || max_abs_t >= 1e15;
   const double to_ns = in_ns ? 1.0 : 1e9;
   out.absolute_times = max_abs_t * (in_ns ? 1e-9 : 1.0) >= 1e5;
   const std::int64_t base = out.absolute_times ? 0 : header_ns;
   std::vector<std::int64_t> t_ns(raw_t.size());
   for (std::size_t i = 0; i < raw_t.size(); ++i) t_ns[i] = base + std::llround(raw_t[i] * to_ns);
   applyPointTimes(out, t_ns);
+}
+
+}  // namespace
+
+DecodedScan decodeRosPointCloud2(const std::uint8_t* data, std::size_t size, const RosDecodeOptions& opt) {
+  RosBuffer b(data, size, "sensor_msgs/PointCloud2");
+  DecodedScan out;
+  out.scan.sensor = opt.sensor;
+  const CloudMessage m = readCloudMessage(b);
+  out.header_utime = nsToUtimeRound(m.header_ns);
+  // Layout checks before any point is read: every row inside the data, every used field inside the record.
+  checkRowLayout(b, m);
+  const PointReaders readers = pointReaders(b, m, opt.point_time_field);
+  if (readers.time_field) out.time_field = readers.time_field->name;
+
+  std::vector<double> raw_t;
+  const double max_abs_t = readPoints(b, m, readers, out, raw_t);
+  if (!readers.time_field) {  // no per-point times: utime = header.stamp, offsets 0
+    out.scan.utime = out.header_utime;
+    return out;
+  }
+  applyRawPointTimes(out, *readers.time_field, raw_t, max_abs_t, m.header_ns);
   return out;
 }
 

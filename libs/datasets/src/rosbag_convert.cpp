@@ -89,6 +89,131 @@ std::string messageContext(const std::string& bag, const BagMessage& m) {
          seconds(m.bag_time) + " s): ";
 }
 
+void checkOptions(const RosbagOptions& opt) {
+  if (!(opt.reorder_window_s >= 0) || !std::isfinite(opt.reorder_window_s))
+    throw DatasetError("--reorder-window must be a non-negative number of seconds");
+  if (!(opt.max_scan_span_s > 0)) throw DatasetError("--max-scan-span must be positive");
+  if (opt.mono16_bits != 0 && (opt.mono16_bits < 9 || opt.mono16_bits > 16))
+    throw DatasetError("--mono16-bits must be 9..16 (or 0 to keep GRAY16)");
+}
+
+RosDecodeOptions decodeOptions(const RosbagOptions& opt, const RosbagTopics& sel) {
+  RosDecodeOptions dec;
+  dec.sensor = !opt.sensor.empty() ? opt.sensor : sel.lidar_type == RosType::LivoxCustomMsg ? "avia" : "generic";
+  dec.point_time_field = opt.point_time_field;
+  dec.mono16_bits = opt.mono16_bits;
+  return dec;
+}
+
+/// |a| of the first `samples` IMU messages, for the unit detection.
+std::vector<double> firstAccelNorms(RosbagReader& bag, const std::string& imu_topic, int samples) {
+  std::vector<double> norms;
+  try {
+    bag.forEach({imu_topic}, [&](const BagMessage& m) {
+      try {
+        norms.push_back(decodeRosImu(m.data->data(), m.data->size()).accel.norm());
+      } catch (const DatasetError&) {  // reported by the main pass
+      }
+      return static_cast<int>(norms.size()) < samples;
+    });
+  } catch (const BagReadError&) {  // a corrupt chunk among the first samples: the main pass reports it
+  }
+  return norms;
+}
+
+/// The main pass: decodes each message of the chosen topics into the reorder buffer and counts what
+/// it skips. A malformed message stops the pass (DatasetError naming it) unless skip_bad_messages.
+class MessageConverter {
+ public:
+  MessageConverter(const std::string& bag_path, const RosbagOptions& opt, const RosDecodeOptions& dec,
+                   ReorderBuffer& buffer, RosbagSummary& summary, std::uint64_t total)
+      : bag_path_(bag_path),
+        opt_(opt),
+        sel_(summary.topics),
+        dec_(dec),
+        buffer_(buffer),
+        summary_(summary),
+        max_span_ns_(std::llround(opt.max_scan_span_s * 1e9)),
+        total_(total) {}
+
+  /// One message; true: go on (the RosbagReader::forEach callback).
+  bool onMessage(const BagMessage& m) {
+    ++summary_.messages_read;
+    try {
+      decode(m);
+    } catch (const BagReadError&) {
+      throw;
+    } catch (const DatasetError& e) {
+      if (!opt_.skip_bad_messages) throw DatasetError(messageContext(bag_path_, m) + e.what());
+      if (skipped_.bad_messages++ == 0) skipped_.bad_example = messageContext(bag_path_, m) + e.what();
+    }
+    if (opt_.progress) opt_.progress(summary_.messages_read, total_);
+    return true;
+  }
+  const Skipped& skipped() const { return skipped_; }
+
+ private:
+  void decode(const BagMessage& m) {
+    const std::uint8_t* d = m.data->data();
+    const std::size_t n = m.data->size();
+    if (*m.topic == sel_.imu) {
+      ImuSample s = decodeRosImu(d, n);
+      s.accel *= summary_.accel_scale;
+      buffer_.push(&opt_.imu_channel, s.utime, s);
+    } else if (*m.topic == sel_.lidar) {
+      pushScan(m, sel_.lidar_type == RosType::LivoxCustomMsg ? decodeLivoxCustomMsg(d, n, dec_)
+                                                             : decodeRosPointCloud2(d, n, dec_));
+    } else if (*m.topic == sel_.image) {
+      Image img = sel_.image_type == RosType::CompressedImage ? decodeRosCompressedImage(d, n, dec_)
+                                                              : decodeRosImage(d, n, dec_);
+      const Utime t = img.utime;
+      buffer_.push(&opt_.camera_channel, t, std::move(img));
+    }
+  }
+
+  /// The scan into the buffer unless empty or spanning more than max_scan_span_s.
+  void pushScan(const BagMessage& m, DecodedScan ds) {
+    skipped_.nonfinite_points += ds.dropped_nonfinite;
+    if (ds.time_field.empty()) ++skipped_.untimed_scans;
+    if (ds.scan.points.empty()) {
+      ++skipped_.empty_scans;
+    } else if (ds.span_ns > max_span_ns_) {
+      if (skipped_.long_scans++ == 0)
+        skipped_.long_example = messageContext(bag_path_, m) + "points span " + std::to_string(ds.span_ns * 1e-9) +
+                                " s (time field '" + ds.time_field + "')";
+    } else {
+      const Utime t = ds.scan.utime;
+      buffer_.push(&opt_.lidar_channel, t, std::move(ds.scan));
+    }
+  }
+
+  const std::string& bag_path_;
+  const RosbagOptions& opt_;
+  const RosbagTopics& sel_;
+  const RosDecodeOptions& dec_;
+  ReorderBuffer& buffer_;
+  RosbagSummary& summary_;
+  const std::int64_t max_span_ns_;
+  const std::uint64_t total_;  ///< messages on the chosen topics, for the progress callback
+  Skipped skipped_;
+};
+
+void addWarnings(RosbagSummary& summary, const ReorderBuffer& buffer, const Skipped& skipped,
+                 const RosbagOptions& opt) {
+  auto warn = [&](std::uint64_t count, const std::string& what) {
+    if (count > 0) summary.warnings.push_back(std::to_string(count) + " " + what);
+  };
+  for (const auto& [channel, count] : buffer.late())
+    warn(count, channel + " events arrived later than the reorder window (" + std::to_string(opt.reorder_window_s) +
+                    " s) and were dropped (use --reorder-window, or check the stamps)");
+  warn(skipped.empty_scans, "empty scans skipped");
+  warn(skipped.long_scans, "scans skipped: point times span more than " + std::to_string(opt.max_scan_span_s) +
+                               " s, wrong time unit? First: " + skipped.long_example);
+  warn(skipped.untimed_scans, "scans without a per-point time field: offsets 0 (undistortion impossible)");
+  warn(skipped.nonfinite_points, "points with non-finite coordinates dropped");
+  warn(skipped.bad_messages, "malformed messages skipped (--skip-bad). First: " + skipped.bad_example);
+}
+
 }  // namespace
 
 std::string RosbagSummary::describe() const {
@@ -103,37 +228,20 @@ std::string RosbagSummary::describe() const {
 }
 
 RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_log, const RosbagOptions& opt) {
-  if (!(opt.reorder_window_s >= 0) || !std::isfinite(opt.reorder_window_s))
-    throw DatasetError("--reorder-window must be a non-negative number of seconds");
-  if (!(opt.max_scan_span_s > 0)) throw DatasetError("--max-scan-span must be positive");
-  if (opt.mono16_bits != 0 && (opt.mono16_bits < 9 || opt.mono16_bits > 16))
-    throw DatasetError("--mono16-bits must be 9..16 (or 0 to keep GRAY16)");
+  checkOptions(opt);
 
   // 1. Topics (all checks before any output exists).
   RosbagReader bag(bag_path);
   RosbagSummary summary;
   summary.topics = selectRosbagTopics(bag.topics(), opt, bag_path);
   const RosbagTopics& sel = summary.topics;
-  RosDecodeOptions dec;
-  dec.sensor = !opt.sensor.empty() ? opt.sensor : sel.lidar_type == RosType::LivoxCustomMsg ? "avia" : "generic";
-  dec.point_time_field = opt.point_time_field;
-  dec.mono16_bits = opt.mono16_bits;
+  const RosDecodeOptions dec = decodeOptions(opt, sel);
 
   // 2. IMU acceleration unit from the first samples.
   if (!sel.imu.empty()) {
-    std::vector<double> norms;
-    if (opt.imu_accel_unit == AccelUnit::Auto) {
-      try {
-        bag.forEach({sel.imu}, [&](const BagMessage& m) {
-          try {
-            norms.push_back(decodeRosImu(m.data->data(), m.data->size()).accel.norm());
-          } catch (const DatasetError&) {  // reported by the main pass
-          }
-          return static_cast<int>(norms.size()) < opt.imu_unit_samples;
-        });
-      } catch (const BagReadError&) {  // a corrupt chunk among the first samples: the main pass reports it
-      }
-    }
+    const std::vector<double> norms = opt.imu_accel_unit == AccelUnit::Auto
+                                          ? firstAccelNorms(bag, sel.imu, opt.imu_unit_samples)
+                                          : std::vector<double>{};
     summary.accel_scale = detectAccelScale(norms, opt, summary.accel_note);
   }
 
@@ -144,49 +252,9 @@ RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_
   const std::uint64_t total = bag.messageCount(wanted);
   SummaryLogWriter out(out_log);
   ReorderBuffer buffer(out, static_cast<Utime>(std::llround(opt.reorder_window_s * 1e6)));
-  Skipped skipped;
-  const std::int64_t max_span_ns = std::llround(opt.max_scan_span_s * 1e9);
-  auto onMessage = [&](const BagMessage& m) {
-    ++summary.messages_read;
-    const std::uint8_t* d = m.data->data();
-    const std::size_t n = m.data->size();
-    try {
-      if (*m.topic == sel.imu) {
-        ImuSample s = decodeRosImu(d, n);
-        s.accel *= summary.accel_scale;
-        buffer.push(&opt.imu_channel, s.utime, s);
-      } else if (*m.topic == sel.lidar) {
-        DecodedScan ds = sel.lidar_type == RosType::LivoxCustomMsg ? decodeLivoxCustomMsg(d, n, dec)
-                                                                   : decodeRosPointCloud2(d, n, dec);
-        skipped.nonfinite_points += ds.dropped_nonfinite;
-        if (ds.time_field.empty()) ++skipped.untimed_scans;
-        if (ds.scan.points.empty()) {
-          ++skipped.empty_scans;
-        } else if (ds.span_ns > max_span_ns) {
-          if (skipped.long_scans++ == 0)
-            skipped.long_example = messageContext(bag_path, m) + "points span " + std::to_string(ds.span_ns * 1e-9) +
-                                   " s (time field '" + ds.time_field + "')";
-        } else {
-          const Utime t = ds.scan.utime;
-          buffer.push(&opt.lidar_channel, t, std::move(ds.scan));
-        }
-      } else if (*m.topic == sel.image) {
-        Image img = sel.image_type == RosType::CompressedImage ? decodeRosCompressedImage(d, n, dec)
-                                                               : decodeRosImage(d, n, dec);
-        const Utime t = img.utime;
-        buffer.push(&opt.camera_channel, t, std::move(img));
-      }
-    } catch (const BagReadError&) {
-      throw;
-    } catch (const DatasetError& e) {
-      if (!opt.skip_bad_messages) throw DatasetError(messageContext(bag_path, m) + e.what());
-      if (skipped.bad_messages++ == 0) skipped.bad_example = messageContext(bag_path, m) + e.what();
-    }
-    if (opt.progress) opt.progress(summary.messages_read, total);
-    return true;
-  };
+  MessageConverter converter(bag_path, opt, dec, buffer, summary, total);
   try {
-    bag.forEach(wanted, onMessage);
+    bag.forEach(wanted, [&](const BagMessage& m) { return converter.onMessage(m); });
   } catch (const DatasetError& e) {
     summary.error = e.what();  // keep what was converted before it
   }
@@ -194,18 +262,7 @@ RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_
   summary.conversion = out.commit();
 
   // 4. Warnings.
-  auto warn = [&](std::uint64_t count, const std::string& what) {
-    if (count > 0) summary.warnings.push_back(std::to_string(count) + " " + what);
-  };
-  for (const auto& [channel, count] : buffer.late())
-    warn(count, channel + " events arrived later than the reorder window (" + std::to_string(opt.reorder_window_s) +
-                    " s) and were dropped (use --reorder-window, or check the stamps)");
-  warn(skipped.empty_scans, "empty scans skipped");
-  warn(skipped.long_scans, "scans skipped: point times span more than " + std::to_string(opt.max_scan_span_s) +
-                               " s, wrong time unit? First: " + skipped.long_example);
-  warn(skipped.untimed_scans, "scans without a per-point time field: offsets 0 (undistortion impossible)");
-  warn(skipped.nonfinite_points, "points with non-finite coordinates dropped");
-  warn(skipped.bad_messages, "malformed messages skipped (--skip-bad). First: " + skipped.bad_example);
+  addWarnings(summary, buffer, converter.skipped(), opt);
   return summary;
 }
 

@@ -153,11 +153,74 @@ std::vector<Vec3> makePathPolyline(const TrajectoryConfig& cfg_in, const WorldCo
 // sum of |amplitude * 2 pi f| per axis, combined as a vector norm.
 double swayRateBound(double amplitude_rad);
 
+namespace {
+
+// Turn rate per metre of the horizontal heading at each sample of a closed path: the heading change
+// between the chords to and from +-m samples (~0.2 m baseline, robust to the polyline's vertices),
+// divided by the arc length between the chords' midpoints. Facing `target` (when given), the heading
+// also turns by v_perp / distance.
+std::vector<double> headingCurvature(const std::vector<Vec3>& path, double path_length, const Vec3* target) {
+  const std::size_t n = path.size();
+  const std::size_t m = std::max<std::size_t>(1, static_cast<std::size_t>(0.2 / (path_length / n)));
+  std::vector<double> kappa(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 a = path[i] - path[(i + n - m) % n], b = path[(i + m) % n] - path[i];
+    const double turn = std::atan2(a.x() * b.y() - a.y() * b.x(), a.x() * b.x() + a.y() * b.y());
+    kappa[i] = std::abs(turn) / std::max(0.5 * (a.norm() + b.norm()), 1e-9);
+    if (target) {
+      const double d = std::hypot(target->x() - path[i].x(), target->y() - path[i].y());
+      kappa[i] = std::max(kappa[i], 1.0 / std::max(d, 0.3));
+    }
+  }
+  return kappa;
+}
+
+// Maximum over a window of +-win samples around each sample (cyclic).
+std::vector<double> cyclicWindowMax(const std::vector<double>& x, int win) {
+  const std::size_t n = x.size();
+  std::vector<double> out(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    double m = 0.0;
+    for (int k = -win; k <= win; ++k) {
+      const auto idx = (static_cast<long long>(i) + k + static_cast<long long>(n)) % static_cast<long long>(n);
+      m = std::max(m, x[static_cast<std::size_t>(idx)]);
+    }
+    out[i] = m;
+  }
+  return out;
+}
+
+// Speed at each sample: cruise limit, turn-rate (`turn_budget` rad/s) and lateral-acceleration limits,
+// then forward / backward passes that bound the tangential acceleration (v^2 = v0^2 + 2 a ds), twice
+// around the loop. seg[i]: length from sample i to i + 1.
+std::vector<double> speedProfile(const std::vector<double>& curvature, const std::vector<double>& seg,
+                                 const TrajectoryConfig& c, double turn_budget) {
+  const std::size_t n = curvature.size();
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double k = std::max(curvature[i], 1e-9);
+    v[i] = std::min({c.speed_mps, turn_budget / k, std::sqrt(c.max_accel_mps2 / k)});
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i < 2 * n; ++i) {
+      const std::size_t a = i % n, b = (i + 1) % n;
+      v[b] = std::min(v[b], std::sqrt(v[a] * v[a] + 2.0 * c.max_accel_mps2 * seg[a]));
+    }
+    for (std::size_t i = 2 * n; i > 0; --i) {
+      const std::size_t b = i % n, a = (i - 1) % n;
+      v[a] = std::min(v[a], std::sqrt(v[b] * v[b] + 2.0 * c.max_accel_mps2 * seg[a]));
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
 SimTrajectory::SimTrajectory(const TrajectoryConfig& cfg_in, const WorldConfig& world)
     : cfg_(withDefaults(cfg_in, world)) {
   path_ = makePathPolyline(cfg_in, world);
   const std::size_t n = path_.size();
-  std::vector<double> seg(n);
+  std::vector<double> seg(n);  // length from sample i to i + 1
   path_length_ = 0.0;
   for (std::size_t i = 0; i < n; ++i) path_length_ += seg[i] = (path_[(i + 1) % n] - path_[i]).norm();
   if (path_length_ < 0.5) throw ConfigError("trajectory: the path is shorter than 0.5 m");
@@ -170,49 +233,23 @@ SimTrajectory::SimTrajectory(const TrajectoryConfig& cfg_in, const WorldConfig& 
   if (budget < 0.2 * max_rot)
     throw ConfigError("trajectory.max_rot_dps: " + std::to_string(cfg_.max_rot_dps) +
                       " leaves too little turn rate beside the sway (lower trajectory.sway_deg)");
-  // Heading change between the chords to and from +-m samples (~0.2 m baseline, robust to the
-  // polyline's vertices), divided by the arc length between the chords' midpoints.
-  const std::size_t m = std::max<std::size_t>(1, static_cast<std::size_t>(0.2 / (path_length_ / n)));
-  std::vector<double> kappa(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 a = path_[i] - path_[(i + n - m) % n], b = path_[(i + m) % n] - path_[i];
-    const double turn = std::atan2(a.x() * b.y() - a.y() * b.x(), a.x() * b.x() + a.y() * b.y());
-    kappa[i] = std::abs(turn) / std::max(0.5 * (a.norm() + b.norm()), 1e-9);
-    if (look_at_) {  // the heading turns by v_perp / distance when facing a point
-      const double d = std::hypot(target_.x() - path_[i].x(), target_.y() - path_[i].y());
-      kappa[i] = std::max(kappa[i], 1.0 / std::max(d, 0.3));
-    }
-  }
+  const std::vector<double> kappa = headingCurvature(path_, path_length_, look_at_ ? &target_ : nullptr);
   const int win = std::max(1, static_cast<int>(0.3 / (path_length_ / n)));
-  std::vector<double> smooth(n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    double m = 0.0;
-    for (int k = -win; k <= win; ++k) {
-      const auto idx = (static_cast<long long>(i) + k + static_cast<long long>(n)) % static_cast<long long>(n);
-      m = std::max(m, kappa[static_cast<std::size_t>(idx)]);
-    }
-    smooth[i] = m;
-  }
+  const std::vector<double> smooth = cyclicWindowMax(kappa, win);
 
-  // 2. Speed profile: cruise limit, turn-rate and lateral-acceleration limits, then forward / backward
-  //    passes that bound the tangential acceleration (v^2 = v0^2 + 2 a ds), twice around the loop.
-  std::vector<double> v(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double k = std::max(smooth[i], 1e-9);
-    v[i] = std::min({cfg_.speed_mps, budget / k, std::sqrt(cfg_.max_accel_mps2 / k)});
-  }
-  for (int pass = 0; pass < 2; ++pass) {
-    for (std::size_t i = 0; i < 2 * n; ++i) {
-      const std::size_t a = i % n, b = (i + 1) % n;
-      v[b] = std::min(v[b], std::sqrt(v[a] * v[a] + 2.0 * cfg_.max_accel_mps2 * seg[a]));
-    }
-    for (std::size_t i = 2 * n; i > 0; --i) {
-      const std::size_t b = i % n, a = (i - 1) % n;
-      v[a] = std::min(v[a], std::sqrt(v[b] * v[b] + 2.0 * cfg_.max_accel_mps2 * seg[a]));
-    }
-  }
+  // 2. Speed profile within the limits.
+  const std::vector<double> v = speedProfile(smooth, seg, cfg_, budget);
 
-  // 3. Time of each sample, then control points at uniform time steps (knots every ~0.2 s).
+  // 3. Control points at uniform time steps.
+  placeControlPoints(seg, v);
+
+  // 4. Check the limits on the final spline (with sway) and slow the whole lap down if needed.
+  fitTimeScale(max_rot);
+}
+
+void SimTrajectory::placeControlPoints(const std::vector<double>& seg, const std::vector<double>& v) {
+  // Time of each sample, then control points at uniform time steps (knots every ~0.2 s).
+  const std::size_t n = path_.size();
   std::vector<double> t(n + 1, 0.0);
   for (std::size_t i = 0; i < n; ++i) t[i + 1] = t[i] + seg[i] / (0.5 * (v[i] + v[(i + 1) % n]));
   const double lap = t[n];
@@ -226,8 +263,9 @@ SimTrajectory::SimTrajectory(const TrajectoryConfig& cfg_in, const WorldConfig& 
     const double f = (tk - t[j]) / (t[j + 1] - t[j]);
     ctrl_.push_back(path_[j] + f * (path_[(j + 1) % n] - path_[j]));
   }
+}
 
-  // 4. Check the limits on the final spline (with sway) and slow the whole lap down if needed.
+void SimTrajectory::fitTimeScale(double max_rot) {
   time_scale_ = 1.0;
   for (int iter = 0; iter < 8; ++iter) {
     measurePeaks();

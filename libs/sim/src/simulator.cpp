@@ -13,6 +13,23 @@ namespace livo::sim {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kCameraMaxRange = 2000.0;  // metres; beyond: sky
+
+// Direction of ray i of scan j after beam noise: `dir` tilted by two normal deviates of `sigma` rad.
+Vec3 perturbedBeam(const Vec3& dir, double sigma, std::uint64_t seed, std::uint64_t j, std::size_t i) {
+  const Vec3 e1 = dir.unitOrthogonal(), e2 = dir.cross(e1);
+  double n1, n2;
+  gaussianPairFromKeys(seed, RngStream::LidarBeam, j, i, n1, n2);
+  return (dir + sigma * (n1 * e1 + n2 * e2)).normalized();
+}
+
+void addLidarStats(LidarStats& sum, const LidarStats& s) {
+  sum.scans += s.scans;
+  sum.rays += s.rays;
+  sum.points += s.points;
+  sum.no_return += s.no_return;
+  sum.blind += s.blind;
+  sum.grazing += s.grazing;
+}
 }  // namespace
 
 Simulator::Simulator(SimScenario scenario, SimOptions options)
@@ -72,16 +89,12 @@ void Simulator::imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth) {
 }
 
 LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
-  const auto& c = sc_.lidar;
   LidarScan scan;
   scan.utime = lidarUtime(j);
-  scan.sensor = c.model;
+  scan.sensor = sc_.lidar.model;
   std::vector<LidarRay> rays;
   const double t0 = relTime(scan.utime);
   pattern_.rays(t0, rays);
-  const double cos_max = std::cos(c.max_incidence_deg * kPi / 180.0);
-  const double beam_sigma = c.beam_noise_deg * kPi / 180.0;
-  const auto jj = static_cast<std::uint64_t>(j);
 
   // Contiguous parts of the ray list per thread; each fills its own point list and counters.
   const int threads = std::clamp(opt_.threads, 1, 16);
@@ -89,53 +102,11 @@ LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
   std::vector<LidarStats> part_stats(static_cast<std::size_t>(threads));
   runParts(threads, [&](int part, int n_parts) {
     const std::size_t first = rays.size() * part / n_parts, last = rays.size() * (part + 1) / n_parts;
-    auto& points = parts[static_cast<std::size_t>(part)];
-    auto& st = part_stats[static_cast<std::size_t>(part)];
-    points.reserve(last - first);
-    Pose T_world_lidar = Pose::Identity();
-    float pose_offset = -1.f;
-    for (std::size_t i = first; i < last; ++i) {
-      const LidarRay& r = rays[i];
-      if (r.time_offset_s != pose_offset) {  // rays of one firing share the pose of their time
-        pose_offset = r.time_offset_s;
-        T_world_lidar = traj_.pose(t0 + static_cast<double>(r.time_offset_s)) * sc_.extrinsics.T_imu_lidar;
-      }
-      // The beam leaves along a slightly perturbed direction (beam noise) but the sensor reports the
-      // range along its nominal direction.
-      Vec3 beam = r.dir;
-      if (beam_sigma > 0.0) {
-        const Vec3 e1 = r.dir.unitOrthogonal(), e2 = r.dir.cross(e1);
-        double n1, n2;
-        gaussianPairFromKeys(seed_, RngStream::LidarBeam, jj, i, n1, n2);
-        beam = (r.dir + beam_sigma * (n1 * e1 + n2 * e2)).normalized();
-      }
-      const Vec3 dir_world = T_world_lidar.linear() * beam;
-      const Hit hit = world_.raycast(T_world_lidar.translation(), dir_world, c.max_range_m, c.beam_divergence_mrad * 1e-3);
-      if (!hit.valid) {
-        ++st.no_return;
-        continue;
-      }
-      if (hit.cosIncidence(dir_world) < cos_max) {
-        ++st.grazing;
-        continue;
-      }
-      const double range = hit.distance + c.range_noise_m * gaussianFromKeys(seed_, RngStream::LidarRange, jj, i);
-      if (range < c.blind_m) {
-        ++st.blind;
-        continue;
-      }
-      if (range > c.max_range_m) {
-        ++st.no_return;
-        continue;
-      }
-      LidarPoint p;
-      p.p_lidar = (range * r.dir).cast<float>();
-      p.time_offset_s = r.time_offset_s;
-      p.intensity = static_cast<float>(255.0 * hit.albedo);
-      p.ring = r.ring;
-      points.push_back(p);
-    }
+    traceRays(j, t0, rays, first, last, parts[static_cast<std::size_t>(part)],
+              part_stats[static_cast<std::size_t>(part)]);
   });
+
+  // The parts in ray order, so that the scan does not depend on the number of threads.
   LidarStats local;
   local.scans = 1;
   local.rays = rays.size();
@@ -144,20 +115,57 @@ LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
   scan.points.reserve(total);
   for (std::size_t k = 0; k < parts.size(); ++k) {
     scan.points.insert(scan.points.end(), parts[k].begin(), parts[k].end());
-    local.no_return += part_stats[k].no_return;
-    local.blind += part_stats[k].blind;
-    local.grazing += part_stats[k].grazing;
+    addLidarStats(local, part_stats[k]);
   }
   local.points = scan.points.size();
-  if (stats) {
-    stats->scans += local.scans;
-    stats->rays += local.rays;
-    stats->points += local.points;
-    stats->no_return += local.no_return;
-    stats->blind += local.blind;
-    stats->grazing += local.grazing;
-  }
+  if (stats) addLidarStats(*stats, local);
   return scan;
+}
+
+void Simulator::traceRays(std::int64_t j, double t0, const std::vector<LidarRay>& rays, std::size_t first,
+                          std::size_t last, std::vector<LidarPoint>& points, LidarStats& st) const {
+  const auto& c = sc_.lidar;
+  const double cos_max = std::cos(c.max_incidence_deg * kPi / 180.0);
+  const double beam_sigma = c.beam_noise_deg * kPi / 180.0;
+  const auto jj = static_cast<std::uint64_t>(j);
+  points.reserve(last - first);
+  Pose T_world_lidar = Pose::Identity();
+  float pose_offset = -1.f;
+  for (std::size_t i = first; i < last; ++i) {
+    const LidarRay& r = rays[i];
+    if (r.time_offset_s != pose_offset) {  // rays of one firing share the pose of their time
+      pose_offset = r.time_offset_s;
+      T_world_lidar = traj_.pose(t0 + static_cast<double>(r.time_offset_s)) * sc_.extrinsics.T_imu_lidar;
+    }
+    // The beam leaves along a slightly perturbed direction (beam noise) but the sensor reports the
+    // range along its nominal direction.
+    const Vec3 beam = beam_sigma > 0.0 ? perturbedBeam(r.dir, beam_sigma, seed_, jj, i) : r.dir;
+    const Vec3 dir_world = T_world_lidar.linear() * beam;
+    const Hit hit = world_.raycast(T_world_lidar.translation(), dir_world, c.max_range_m, c.beam_divergence_mrad * 1e-3);
+    if (!hit.valid) {
+      ++st.no_return;
+      continue;
+    }
+    if (hit.cosIncidence(dir_world) < cos_max) {
+      ++st.grazing;
+      continue;
+    }
+    const double range = hit.distance + c.range_noise_m * gaussianFromKeys(seed_, RngStream::LidarRange, jj, i);
+    if (range < c.blind_m) {
+      ++st.blind;
+      continue;
+    }
+    if (range > c.max_range_m) {
+      ++st.no_return;
+      continue;
+    }
+    LidarPoint p;
+    p.p_lidar = (range * r.dir).cast<float>();
+    p.time_offset_s = r.time_offset_s;
+    p.intensity = static_cast<float>(255.0 * hit.albedo);
+    p.ring = r.ring;
+    points.push_back(p);
+  }
 }
 
 Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {

@@ -82,6 +82,95 @@ World::World(std::vector<Primitive> primitives, TextureBank textures, std::uint6
   build(0, static_cast<int>(prims_.size()), lo, hi, 0);
 }
 
+namespace {
+
+// Half the surface area of the box [a, b] (SAH costs compare areas, so the factor 2 does not matter).
+double halfArea(const Vec3& a, const Vec3& b) {
+  const Vec3 e = (b - a).cwiseMax(0.0);
+  return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
+}
+
+// Bounds of the primitives ids[0..count) (box_*) and of their centroids (centroid_*).
+struct BuildBounds {
+  Vec3 box_lo, box_hi, centroid_lo, centroid_hi;
+};
+
+BuildBounds buildBounds(const int* ids, int count, const std::vector<Vec3>& lo, const std::vector<Vec3>& hi) {
+  BuildBounds b;
+  b.box_lo = Vec3::Constant(std::numeric_limits<double>::infinity());
+  b.box_hi = -b.box_lo;
+  b.centroid_lo = b.box_lo;
+  b.centroid_hi = b.box_hi;
+  for (int k = 0; k < count; ++k) {
+    const int i = ids[k];
+    b.box_lo = b.box_lo.cwiseMin(lo[i]);
+    b.box_hi = b.box_hi.cwiseMax(hi[i]);
+    const Vec3 c = 0.5 * (lo[i] + hi[i]);
+    b.centroid_lo = b.centroid_lo.cwiseMin(c);
+    b.centroid_hi = b.centroid_hi.cwiseMax(c);
+  }
+  return b;
+}
+
+// SAH bin (0..kBins-1) of primitive i's centroid along `axis`; used both to cost and to partition.
+int centroidBin(int i, int axis, const std::vector<Vec3>& lo, const std::vector<Vec3>& hi, const BuildBounds& b) {
+  const double c = 0.5 * (lo[i][axis] + hi[i][axis]);
+  return std::min(kBins - 1, static_cast<int>(kBins * (c - b.centroid_lo[axis]) /
+                                              (b.centroid_hi[axis] - b.centroid_lo[axis])));
+}
+
+// Cheapest split so far: below bin `bin` + 1 of `axis` goes left; axis -1 = a leaf.
+struct SahSplit {
+  double cost = 0.0;
+  int axis = -1, bin = 0;
+};
+
+// Bins the primitives along `axis` and keeps in `best` the split plane between bins that costs least:
+// 0.3 area(node) + area(left) n_left + area(right) n_right.
+void bestSplitOnAxis(const int* ids, int count, const std::vector<Vec3>& lo, const std::vector<Vec3>& hi,
+                     const BuildBounds& bounds, int axis, SahSplit& best) {
+  std::array<int, kBins> cnt{};
+  std::array<Vec3, kBins> blo, bhi;
+  blo.fill(Vec3::Constant(std::numeric_limits<double>::infinity()));
+  bhi.fill(-Vec3::Constant(std::numeric_limits<double>::infinity()));
+  for (int k = 0; k < count; ++k) {
+    const int i = ids[k];
+    const int b = centroidBin(i, axis, lo, hi, bounds);
+    ++cnt[b];
+    blo[b] = blo[b].cwiseMin(lo[i]);
+    bhi[b] = bhi[b].cwiseMax(hi[i]);
+  }
+  // Sweep: right-side areas from the top, then left-side from the bottom.
+  std::array<double, kBins> right_area{};
+  std::array<int, kBins> right_cnt{};
+  Vec3 rlo = blo[kBins - 1], rhi = bhi[kBins - 1];
+  int rc = 0;
+  for (int b = kBins - 1; b > 0; --b) {
+    rlo = rlo.cwiseMin(blo[b]);
+    rhi = rhi.cwiseMax(bhi[b]);
+    rc += cnt[b];
+    right_area[b] = halfArea(rlo, rhi);
+    right_cnt[b] = rc;
+  }
+  Vec3 llo = blo[0], lhi = bhi[0];
+  int lc = 0;
+  for (int b = 0; b < kBins - 1; ++b) {
+    llo = llo.cwiseMin(blo[b]);
+    lhi = lhi.cwiseMax(bhi[b]);
+    lc += cnt[b];
+    if (lc == 0 || right_cnt[b + 1] == 0) continue;
+    const double cost = 0.3 * halfArea(bounds.box_lo, bounds.box_hi) + halfArea(llo, lhi) * lc +
+                        right_area[b + 1] * right_cnt[b + 1];
+    if (cost < best.cost) {
+      best.cost = cost;
+      best.axis = axis;
+      best.bin = b;
+    }
+  }
+}
+
+}  // namespace
+
 // Top-down build with the surface area heuristic (SAH, MacDonald & Booth 1990): the split plane
 // among 16 centroid bins per axis minimising area(left) n_left + area(right) n_right; leaves hold up
 // to 4 primitives (or more when no split pays off).
@@ -89,79 +178,27 @@ int World::build(int first, int count, std::vector<Vec3>& lo, std::vector<Vec3>&
   const int index = static_cast<int>(nodes_.size());
   nodes_.push_back({});
   Node n;
-  Vec3 nlo = Vec3::Constant(std::numeric_limits<double>::infinity()), nhi = -nlo;
-  Vec3 clo = nlo, chi = nhi;
-  for (int k = first; k < first + count; ++k) {
-    const int i = order_[static_cast<std::size_t>(k)];
-    nlo = nlo.cwiseMin(lo[i]);
-    nhi = nhi.cwiseMax(hi[i]);
-    const Vec3 c = 0.5 * (lo[i] + hi[i]);
-    clo = clo.cwiseMin(c);
-    chi = chi.cwiseMax(c);
-  }
-  auto area = [](const Vec3& a, const Vec3& b) {
-    const Vec3 e = (b - a).cwiseMax(0.0);
-    return e.x() * e.y() + e.y() * e.z() + e.z() * e.x();
-  };
-  storeBounds(nlo, nhi, n.lo, n.hi);
-  double best_cost = area(nlo, nhi) * count;  // cost of a leaf, in the same units
-  int best_axis = -1, best_bin = 0;
-  auto binOf = [&](int i, int axis) {
-    const double c = 0.5 * (lo[i][axis] + hi[i][axis]);
-    return std::min(kBins - 1, static_cast<int>(kBins * (c - clo[axis]) / (chi[axis] - clo[axis])));
-  };
+  const int* ids = order_.data() + first;
+  const BuildBounds bounds = buildBounds(ids, count, lo, hi);
+  storeBounds(bounds.box_lo, bounds.box_hi, n.lo, n.hi);
+  SahSplit split;
+  split.cost = halfArea(bounds.box_lo, bounds.box_hi) * count;  // cost of a leaf, in the same units
   if (count > 1 && depth < kMaxDepth) {
     for (int axis = 0; axis < 3; ++axis) {
-      const double extent = chi[axis] - clo[axis];
-      if (extent <= 0.0) continue;
-      std::array<int, kBins> cnt{};
-      std::array<Vec3, kBins> blo, bhi;
-      blo.fill(Vec3::Constant(std::numeric_limits<double>::infinity()));
-      bhi.fill(-Vec3::Constant(std::numeric_limits<double>::infinity()));
-      for (int k = first; k < first + count; ++k) {
-        const int i = order_[static_cast<std::size_t>(k)];
-        const int b = binOf(i, axis);
-        ++cnt[b];
-        blo[b] = blo[b].cwiseMin(lo[i]);
-        bhi[b] = bhi[b].cwiseMax(hi[i]);
-      }
-      // Sweep: right-side areas from the top, then left-side from the bottom.
-      std::array<double, kBins> right_area{};
-      std::array<int, kBins> right_cnt{};
-      Vec3 rlo = blo[kBins - 1], rhi = bhi[kBins - 1];
-      int rc = 0;
-      for (int b = kBins - 1; b > 0; --b) {
-        rlo = rlo.cwiseMin(blo[b]);
-        rhi = rhi.cwiseMax(bhi[b]);
-        rc += cnt[b];
-        right_area[b] = area(rlo, rhi);
-        right_cnt[b] = rc;
-      }
-      Vec3 llo = blo[0], lhi = bhi[0];
-      int lc = 0;
-      for (int b = 0; b < kBins - 1; ++b) {
-        llo = llo.cwiseMin(blo[b]);
-        lhi = lhi.cwiseMax(bhi[b]);
-        lc += cnt[b];
-        if (lc == 0 || right_cnt[b + 1] == 0) continue;
-        const double cost = 0.3 * area(nlo, nhi) + area(llo, lhi) * lc + right_area[b + 1] * right_cnt[b + 1];
-        if (cost < best_cost) {
-          best_cost = cost;
-          best_axis = axis;
-          best_bin = b;
-        }
-      }
+      if (bounds.centroid_hi[axis] - bounds.centroid_lo[axis] <= 0.0) continue;  // centroids in one plane
+      bestSplitOnAxis(ids, count, lo, hi, bounds, axis, split);
     }
   }
-  if (best_axis < 0) {
+  if (split.axis < 0) {
     n.first = first;
     n.count = count;
     nodes_[static_cast<std::size_t>(index)] = n;
     return index;
   }
-  // Same bin formula as above, so both sides are non-empty.
-  const auto mid_it = std::partition(order_.begin() + first, order_.begin() + first + count,
-                                     [&](int i) { return binOf(i, best_axis) <= best_bin; });
+  // Same bin formula as in the costs, so both sides are non-empty.
+  const auto mid_it = std::partition(order_.begin() + first, order_.begin() + first + count, [&](int i) {
+    return centroidBin(i, split.axis, lo, hi, bounds) <= split.bin;
+  });
   const int mid = static_cast<int>(mid_it - order_.begin());
   n.left = build(first, mid - first, lo, hi, depth + 1);
   n.right = build(mid, first + count - mid, lo, hi, depth + 1);
@@ -178,43 +215,52 @@ inline bool beats(double t, int i, const Hit& best, double t_max) {
 
 bool World::intersect(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const {
   const Primitive& p = prims_[static_cast<std::size_t>(i)];
-  if (p.type == Primitive::Type::Box) {
-    const Vec3 ol = p.R_world_local.transpose() * (o - p.center);
-    const Vec3 dl = p.R_world_local.transpose() * d;
-    double t_in = -std::numeric_limits<double>::infinity(), t_out = std::numeric_limits<double>::infinity();
-    int axis_in = 0, axis_out = 0;
-    bool neg_in = false, neg_out = false;
-    for (int a = 0; a < 3; ++a) {
-      if (std::abs(dl[a]) < 1e-15) {
-        if (std::abs(ol[a]) > p.half[a]) return false;
-        continue;
-      }
-      const double inv = 1.0 / dl[a];
-      double tn = (-p.half[a] - ol[a]) * inv, tf = (p.half[a] - ol[a]) * inv;
-      if (tn > tf) std::swap(tn, tf);
-      // A ray going +a enters through the -a face and leaves through the +a face.
-      if (tn > t_in) { t_in = tn; axis_in = a; neg_in = dl[a] > 0; }
-      if (tf < t_out) { t_out = tf; axis_out = a; neg_out = dl[a] < 0; }
+  if (p.type == Primitive::Type::Box) return intersectBox(i, o, d, t_max, best);
+  return intersectCylinder(i, o, d, t_max, best);
+}
+
+// Slabs in the box frame: the entry face (or the exit face when the origin is inside).
+bool World::intersectBox(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const {
+  const Primitive& p = prims_[static_cast<std::size_t>(i)];
+  const Vec3 ol = p.R_world_local.transpose() * (o - p.center);
+  const Vec3 dl = p.R_world_local.transpose() * d;
+  double t_in = -std::numeric_limits<double>::infinity(), t_out = std::numeric_limits<double>::infinity();
+  int axis_in = 0, axis_out = 0;
+  bool neg_in = false, neg_out = false;
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(dl[a]) < 1e-15) {
+      if (std::abs(ol[a]) > p.half[a]) return false;
+      continue;
     }
-    if (t_out < t_in) return false;
-    double t;
-    int axis;
-    bool neg;
-    if (t_in > kEps) { t = t_in; axis = axis_in; neg = neg_in; }
-    else if (t_out > kEps) { t = t_out; axis = axis_out; neg = neg_out; }  // origin inside the box
-    else return false;
-    if (!beats(t, i, best, t_max)) return false;
-    const Vec3 q = ol + t * dl;
-    const int j = (axis + 1) % 3, k = (axis + 2) % 3;
-    best.valid = true;
-    best.distance = t;
-    best.surface = i * kFacesPerPrimitive + 2 * axis + (neg ? 1 : 0);
-    best.normal = (neg ? -1.0 : 1.0) * p.R_world_local.col(axis);
-    best.u = q[j] + p.half[j];
-    best.v = q[k] + p.half[k];
-    return true;
+    const double inv = 1.0 / dl[a];
+    double tn = (-p.half[a] - ol[a]) * inv, tf = (p.half[a] - ol[a]) * inv;
+    if (tn > tf) std::swap(tn, tf);
+    // A ray going +a enters through the -a face and leaves through the +a face.
+    if (tn > t_in) { t_in = tn; axis_in = a; neg_in = dl[a] > 0; }
+    if (tf < t_out) { t_out = tf; axis_out = a; neg_out = dl[a] < 0; }
   }
-  // Vertical cylinder: side (quadratic in t) and two caps.
+  if (t_out < t_in) return false;
+  double t;
+  int axis;
+  bool neg;
+  if (t_in > kEps) { t = t_in; axis = axis_in; neg = neg_in; }
+  else if (t_out > kEps) { t = t_out; axis = axis_out; neg = neg_out; }  // origin inside the box
+  else return false;
+  if (!beats(t, i, best, t_max)) return false;
+  const Vec3 q = ol + t * dl;
+  const int j = (axis + 1) % 3, k = (axis + 2) % 3;
+  best.valid = true;
+  best.distance = t;
+  best.surface = i * kFacesPerPrimitive + 2 * axis + (neg ? 1 : 0);
+  best.normal = (neg ? -1.0 : 1.0) * p.R_world_local.col(axis);
+  best.u = q[j] + p.half[j];
+  best.v = q[k] + p.half[k];
+  return true;
+}
+
+// Vertical cylinder: side (quadratic in t) and two caps.
+bool World::intersectCylinder(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const {
+  const Primitive& p = prims_[static_cast<std::size_t>(i)];
   const double r = p.half.x(), hz = p.half.z();
   const double ox = o.x() - p.center.x(), oy = o.y() - p.center.y();
   int face = -1;

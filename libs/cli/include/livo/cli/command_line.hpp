@@ -149,6 +149,19 @@ class CommandLine {
   const Option* find(const std::string& name) const;
   CommandLine* findCommand(const std::string& name) const;
   void parseArgs(const std::vector<std::string>& args, std::size_t first, std::ostream& out, Outcome& outcome);
+  /// --help / -h / --version anywhere on this level (before "--") win over errors elsewhere on the line:
+  /// prints, sets `outcome` and returns true.
+  bool printHelpOrVersion(const std::vector<std::string>& args, std::size_t first, std::ostream& out,
+                          Outcome& outcome) const;
+  /// The option at args[i] ("--name", "--name=value" or "--name value"); returns the index of its last word.
+  std::size_t parseOption(const std::vector<std::string>& args, std::size_t i);
+  std::string unknownOptionMessage(const std::string& name) const;
+  /// args[i] picks the sub-command, which parses the rest of the line.
+  void parseCommand(const std::vector<std::string>& args, std::size_t i, std::ostream& out, Outcome& outcome);
+  /// `arg` as the positional argument number `index`.
+  void parsePositional(std::size_t index, const std::string& arg);
+  /// "a|b|c" of the sub-commands.
+  std::string commandNames() const;
   void setValue(Option& o, const std::string& value);
   void checkRequired() const;
   std::string optionsHelp(bool with_builtins) const;

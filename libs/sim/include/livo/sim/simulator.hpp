@@ -114,6 +114,10 @@ class Simulator {
 
  private:
   void imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth);
+  /// Rays [first, last) of scan j (which starts t0 s after the start): returns into `points`, the
+  /// rays without one counted in `st`.
+  void traceRays(std::int64_t j, double t0, const std::vector<LidarRay>& rays, std::size_t first, std::size_t last,
+                 std::vector<LidarPoint>& points, LidarStats& st) const;
 
   SimScenario sc_;
   SimOptions opt_;

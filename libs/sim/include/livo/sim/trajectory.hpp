@@ -57,6 +57,10 @@ class SimTrajectory {
   void timeWarp(double t, double& tau, double& dtau, double& ddtau) const;
   void sway(double t, Vec3& angles, Vec3& rates, double& z, double& dz, double& ddz) const;
   void measurePeaks();
+  /// ctrl_ and knot_dt_ from the speed v at each path sample (seg[i]: length from sample i to i + 1).
+  void placeControlPoints(const std::vector<double>& seg, const std::vector<double>& v);
+  /// time_scale_ <= 1 so that the final spline keeps speed_mps and `max_rot` (rad/s); throws if it cannot.
+  void fitTimeScale(double max_rot);
 
   TrajectoryConfig cfg_;
   std::vector<Vec3> path_;

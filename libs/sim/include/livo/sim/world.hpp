@@ -86,6 +86,8 @@ class World {
   int build(int first, int count, std::vector<Vec3>& lo, std::vector<Vec3>& hi, int depth);
   /// Intersects primitive i with the ray; updates `best` when closer than best.distance.
   bool intersect(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const;
+  bool intersectBox(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const;
+  bool intersectCylinder(int i, const Vec3& o, const Vec3& d, double t_max, Hit& best) const;
   void finish(Hit& h, const Vec3& origin, const Vec3& dir, double footprint_rad) const;
 
   std::vector<Primitive> prims_;
