@@ -15,8 +15,8 @@ class InProcessMap final : public MapAccess {
   /// `map` is not owned and must outlive this object.
   explicit InProcessMap(HybridMap& map) : map_(map), visual_(map) {}
 
-  const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidarMap(); }
-  void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.insertLidar(points); }
+  const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidar().voxels(); }
+  void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.lidar().insert(points); }
   VisualMapOps* visualMap(const Frame&, FrameResult&) override { return &visual_; }
   void finishFrame(const Frame&, FrameResult& r) override { r.map = map_.update(r.lio.state.p_world_imu); }
 
