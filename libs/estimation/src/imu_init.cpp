@@ -45,6 +45,7 @@ bool ImuInitializer::windowStats(WindowStats& w) const {
   w.score = std::max(w.rms_gyro / cfg_.staticGyroThreshold(), w.rms_accel / cfg_.staticAccelThreshold());
   // A steady turn has a calm gyro too: at rest the mean rate is the bias, which the prior bounds.
   if (w.mean_gyro.norm() > 5.0 * cfg_.init_gyro_bias_sigma_rad_s) w.score = std::max(w.score, 2.0);
+  w.start = begin->utime;
   w.end = samples_.back().utime;
   return std::isfinite(w.score);
 }
@@ -96,6 +97,14 @@ void ImuInitializer::choose(const WindowStats& w) {
   best_ = w;
   done_ = true;
   no_static_ = false;
+}
+
+void ImuInitializer::reject() {
+  done_ = false;
+  have_best_ = false;
+  no_static_ = true;
+  // The windows up to now moved: only windows that start after now count.
+  while (samples_.size() > 1) samples_.pop_front();
 }
 
 StateCov ImuInitializer::initialCovariance() const {

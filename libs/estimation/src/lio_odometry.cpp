@@ -5,6 +5,8 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/sensors/downsample.hpp"
 
+#include <sstream>
+
 
 namespace livo {
 
@@ -33,30 +35,57 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
     last_imu_fed_ = s.utime;
     if (init_.add(s)) break;  // the rest of the frame's samples are propagated below
   }
+  // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
+  const bool motion_converged = motion_->process(frame);
   if (init_.done()) {
-    x_ = init_.initialState();
-    P_ = init_.initialCovariance();
-    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
-    // Through the samples after the chosen window, up to where this frame's own samples begin (the
-    // frame's propagation keeps its trace for the undistortion).
-    const Utime cut = frame.imu.empty() ? x_.utime : frame.imu.front().utime;
-    std::vector<ImuSample> before;
-    for (const auto& s : init_.samplesAfterWindow())
-      if (s.utime < cut) before.push_back(s);
-    if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
-    motion_.reset();
-    init_message_ = init_.describe();
-    return InitStep::AtRest;
+    switch (confirmRest(frame)) {
+      case Rest::Confirmed:
+      case Rest::Unconfirmable: initAtRest(frame); return InitStep::AtRest;
+      case Rest::Moved: init_.reject(); break;  // constant velocity looked like rest to the IMU
+      case Rest::Unknown: return InitStep::Waiting;
+    }
   }
-  // From motion: the motion initialiser sees every frame from the first one; its state is taken once
-  // the static search has given up (a static window, when there is one, observes the gyro bias).
-  if (motion_->process(frame) && init_.noStaticWindow()) {
+  // From motion, once the static search has given up (a static window observes the gyro bias).
+  if (motion_converged && init_.noStaticWindow()) {
     motion_->takeOver(x_, P_);
     propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, motion_->accelScale());
-    init_message_ = "no static window within " + std::to_string(cfg_.imu.init_static_wait_s) + " s; " + motion_->describe();
+    std::ostringstream os;
+    os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
+       << "; " << motion_->describe();
+    init_message_ = os.str();
     return InitStep::InMotion;
   }
   return InitStep::Waiting;
+}
+
+LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
+  // Rest: the registered positions since the window began stay within 5 sigma of a LiDAR return
+  // (a whole scan registers far better than one return).
+  bool known = false;
+  const bool rest = motion_->atRestSince(init_.windowStart(), 5.0 * cfg_.lio.range_noise_m, known);
+  if (known) {
+    if (rest) return Rest::Confirmed;
+    ++rest_rejections_;
+    return Rest::Moved;
+  }
+  // Without LiDAR registrations for long (no returns, no overlap) the IMU's decision stands.
+  const double waited_s = toSeconds(frame.utime - init_.firstSampleTime());
+  return waited_s > 3.0 * cfg_.imu.init_static_wait_s ? Rest::Unconfirmable : Rest::Unknown;
+}
+
+void LioOdometry::initAtRest(const Frame& frame) {
+  x_ = init_.initialState();
+  P_ = init_.initialCovariance();
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+  // Through the samples after the chosen window, up to where this frame's own samples begin (the
+  // frame's propagation keeps its trace for the undistortion).
+  const Utime cut = frame.imu.empty() ? x_.utime : frame.imu.front().utime;
+  std::vector<ImuSample> before;
+  for (const auto& s : init_.samplesAfterWindow())
+    if (s.utime < cut) before.push_back(s);
+  if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+  motion_.reset();
+  init_message_ = init_.describe();
 }
 
 std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,

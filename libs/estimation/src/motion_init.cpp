@@ -1,21 +1,24 @@
 #include "livo/estimation/motion_init.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 namespace livo {
 
 void MotionInitConfig::load(const ConfigNode& n) {
-  n.get("init_motion_speed_sigma_mps", speed_sigma_mps).get("init_motion_gravity_sigma_mps2", gravity_sigma_mps2);
+  n.get("init_motion_rot_sigma_deg", rot_sigma_deg).get("init_motion_pos_sigma_m", pos_sigma_m);
   n.get("init_motion_min_updates", min_updates).get("init_motion_max_speed_sigma_mps", max_speed_sigma_mps);
-  n.get("init_motion_max_tilt_sigma_deg", max_tilt_sigma_deg);
-  n.check(speed_sigma_mps > 0 && speed_sigma_mps < 100, "init_motion_speed_sigma_mps", "must be in (0, 100) m/s");
-  n.check(gravity_sigma_mps2 > 0 && gravity_sigma_mps2 < 20, "init_motion_gravity_sigma_mps2", "must be in (0, 20) m/s^2");
-  n.check(min_updates >= 2 && min_updates <= 1000, "init_motion_min_updates", "must be in [2, 1000]");
+  n.get("init_motion_max_tilt_sigma_deg", max_tilt_sigma_deg).get("init_motion_max_window_s", max_window_s);
+  n.check(rot_sigma_deg > 0 && rot_sigma_deg < 90, "init_motion_rot_sigma_deg", "must be in (0, 90) deg");
+  n.check(pos_sigma_m > 0 && pos_sigma_m < 100, "init_motion_pos_sigma_m", "must be in (0, 100) m");
+  n.check(min_updates >= 3 && min_updates <= 1000, "init_motion_min_updates", "must be in [3, 1000]");
   n.check(max_speed_sigma_mps > 0, "init_motion_max_speed_sigma_mps", "must be > 0");
   n.check(max_tilt_sigma_deg > 0 && max_tilt_sigma_deg < 30, "init_motion_max_tilt_sigma_deg", "must be in (0, 30) deg");
+  n.check(max_window_s >= 1 && max_window_s <= 120, "init_motion_max_window_s", "must be in [1, 120] s");
 }
 
 MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio,
@@ -23,101 +26,283 @@ MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg,
     : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), prepare_(std::move(prepare)),
       map_(std::make_unique<VoxelMap>(map)) {}
 
+namespace {
+
+double fixSigma(const LioConfig& lio) { return std::max(2.0 * lio.range_noise_m, 0.01); }
+
+/// Trace over [t_from, t_to] with gyro rotation from R_from and constant velocity v from p_from.
+std::vector<ImuTracePoint> gyroTrace(const std::vector<ImuSample>& samples, Utime t_from, Utime t_to, const Mat3& R_from,
+                                     const Vec3& p_from, const Vec3& v) {
+  std::vector<ImuTracePoint> trace;
+  std::vector<Utime> cuts{t_from};
+  for (const auto& s : samples)
+    if (s.utime > cuts.back() && s.utime < t_to) cuts.push_back(s.utime);
+  cuts.push_back(t_to);
+  Mat3 R = R_from;
+  std::size_t k = 0;
+  for (std::size_t j = 0; j + 1 < cuts.size(); ++j) {
+    while (k + 1 < samples.size() && samples[k + 1].utime <= cuts[j]) ++k;
+    const ImuSample& a = samples[k];
+    const ImuSample& b = (k + 1 < samples.size() && a.utime <= cuts[j]) ? samples[k + 1] : a;
+    ImuTracePoint tp;
+    tp.utime = cuts[j];
+    tp.R_world_imu = R;
+    tp.p_world_imu = p_from + v * toSeconds(cuts[j] - t_from);
+    tp.v_world = v;
+    tp.omega = 0.5 * (a.gyro + b.gyro);
+    trace.push_back(tp);
+    R = R * expSO3(tp.omega * toSeconds(cuts[j + 1] - cuts[j]));
+  }
+  ImuTracePoint end = trace.empty() ? ImuTracePoint{} : trace.back();
+  end.utime = t_to;
+  end.R_world_imu = R;
+  end.p_world_imu = p_from + v * toSeconds(t_to - t_from);
+  trace.push_back(end);
+  return trace;
+}
+
+}  // namespace
+
 bool MotionInitializer::start(const Frame& frame) {
-  if (frame.imu.empty()) return false;
+  if (frame.imu.empty() || frame.sweep.points.empty()) return false;
   Vec3 mean = Vec3::Zero();
   for (const auto& s : frame.imu) mean += s.accel;
   mean /= double(frame.imu.size());
   const double norm = mean.norm();
   if (!(norm > 1e-3) || !std::isfinite(norm)) return false;  // no usable specific force yet
-  accel_scale_ = norm < 4.0 ? imu_.gravity_m_s2 : 1.0;  // g units or m/s^2
-  propagator_ = std::make_unique<ImuPropagator>(imu_, accel_scale_);
-  x_ = NavState();
-  x_.utime = frame.imu.front().utime;
-  x_.g_world = -mean.normalized() * imu_.gravity_m_s2;  // the first IMU frame is the world
-  using namespace sidx;
-  P_ = initialCovariance();
-  P_.block<3, 3>(kRot, kRot) = Mat3::Identity() * 1e-8;  // the world's definition
-  P_.block<3, 3>(kPos, kPos) = Mat3::Identity() * 1e-8;
-  P_.block<3, 3>(kVel, kVel) = Mat3::Identity() * cfg_.speed_sigma_mps * cfg_.speed_sigma_mps;
-  P_.block<3, 3>(kGrav, kGrav) = Mat3::Identity() * cfg_.gravity_sigma_mps2 * cfg_.gravity_sigma_mps2;
-  P_.block<3, 3>(kBg, kBg) = Mat3::Identity() * imu_.init_gyro_bias_sigma_rad_s * imu_.init_gyro_bias_sigma_rad_s;
-  P_.block<3, 3>(kBa, kBa) = Mat3::Identity() * imu_.init_accel_bias_sigma_mps2 * imu_.init_accel_bias_sigma_mps2;
+  accel_scale_ = norm < 4.0 ? imu_.gravity_m_s2 : 1.0;     // g units or m/s^2
+  map_->clear();
+  fixes_.clear();
+  samples_ = frame.imu;
+  v_cv_ = Vec3::Zero();
+  solved_ = rebuilt_ = false;
+  first_sweep_ = frame.sweep;
+  first_frame_imu_.imu = frame.imu;
+  first_frame_imu_.utime = frame.utime;
+  // The first fix defines the world: the IMU frame at this frame's time.
+  std::vector<ImuTracePoint> trace = gyroTrace(frame.imu, frame.imu.front().utime, frame.utime, Mat3::Identity(),
+                                               Vec3::Zero(), Vec3::Zero());
+  const Mat3 R_end_T = trace.back().R_world_imu.transpose();
+  for (auto& tp : trace) tp.R_world_imu = R_end_T * tp.R_world_imu;
+  points_ = prepare_(frame.sweep, trace);
+  if (points_.empty()) return false;
+  insert(points_, Mat3::Identity(), Vec3::Zero());
+  fixes_.push_back({frame.utime, Mat3::Identity(), Vec3::Zero()});
   started_ = true;
+  last_utime_ = frame.utime;
   return true;
 }
 
+std::vector<ImuTracePoint> MotionInitializer::predictTrace(const Frame& frame, Mat3& R_pred, Vec3& p_pred) const {
+  const Fix& last = fixes_.back();
+  std::vector<ImuSample> s = frame.imu;
+  if (!samples_.empty()) s.insert(s.begin(), samples_.back());  // the sample holding at the last fix
+  std::vector<ImuTracePoint> trace = gyroTrace(s, last.utime, frame.utime, last.R, last.p, v_cv_);
+  R_pred = trace.back().R_world_imu;
+  p_pred = trace.back().p_world_imu;
+  return trace;
+}
+
+bool MotionInitializer::registerFrame(const Mat3& R_pred, const Vec3& p_pred, Mat3& R, Vec3& p) const {
+  NavState x;
+  x.R_world_imu = R_pred;
+  x.p_world_imu = p_pred;
+  StateCov P = StateCov::Identity() * 1e-10;  // only the pose is free
+  using namespace sidx;
+  const double sr = cfg_.rot_sigma_deg * M_PI / 180.0;
+  P.block<3, 3>(kRot, kRot) = Mat3::Identity() * sr * sr;
+  P.block<3, 3>(kPos, kPos) = Mat3::Identity() * cfg_.pos_sigma_m * cfg_.pos_sigma_m;
+  const LioUpdateResult u = lidarUpdate(x, P, points_, *map_, lio_);
+  if (u.matched < min_matches_) return false;
+  R = x.R_world_imu;
+  p = x.p_world_imu;
+  return true;
+}
+
+void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) {
+  NavState x;
+  x.R_world_imu = R;
+  x.p_world_imu = p;
+  const StateCov P = StateCov::Zero();
+  std::vector<PointWithCov> world;
+  world.reserve(pts.size());
+  for (const auto& bp : pts) world.push_back({R * bp.p_imu + p, worldPointCovariance(x, P, bp)});
+  map_->insert(world);
+}
+
+void MotionInitializer::rebuildMap() {
+  // The first scan again, undistorted with the velocity the first two fixes give.
+  const Fix& f0 = fixes_.front();
+  const Utime t_first = first_frame_imu_.imu.front().utime;
+  std::vector<ImuTracePoint> trace =
+      gyroTrace(first_frame_imu_.imu, t_first, f0.utime, Mat3::Identity(), Vec3::Zero(), v_cv_);
+  const Mat3 R_end_T = trace.back().R_world_imu.transpose();
+  const Vec3 p_end = trace.back().p_world_imu;
+  for (auto& tp : trace) {
+    tp.R_world_imu = R_end_T * tp.R_world_imu;
+    tp.p_world_imu = R_end_T * (tp.p_world_imu - p_end);
+  }
+  map_->clear();
+  insert(prepare_(first_sweep_, trace), Mat3::Identity(), Vec3::Zero());
+  first_sweep_ = LidarScan{};
+  rebuilt_ = true;
+}
+
 bool MotionInitializer::process(const Frame& frame) {
-  if (!started_ && !start(frame)) return false;
-  if (frame.utime <= x_.utime) return false;
-  ++frames_;
-  std::vector<ImuTracePoint> trace;
-  propagator_->propagate(x_, P_, frame.imu, frame.utime, &trace);
+  if (started_ && toSeconds(frame.utime - fixes_.front().utime) > cfg_.max_window_s) started_ = false;  // start over
+  if (!started_) return start(frame) && false;
+  if (frame.utime <= last_utime_) return solved_;
+  last_utime_ = frame.utime;
+  Mat3 R_pred, R;
+  Vec3 p_pred, p;
+  const std::vector<ImuTracePoint> trace = predictTrace(frame, R_pred, p_pred);
+  samples_.insert(samples_.end(), frame.imu.begin(), frame.imu.end());
   points_ = prepare_(frame.sweep, trace);
-  if (points_.empty()) return false;
-  if (map_started_) {
-    NavState x = x_;
-    StateCov P = P_;
-    const LioUpdateResult u = lidarUpdate(x, P, points_, *map_, lio_);
-    if (u.matched >= min_matches_) {
-      x_ = x;
-      P_ = P;
-      ++updates_;
-    }
+  if (points_.empty() || !registerFrame(R_pred, p_pred, R, p)) return solved_;
+  const Fix& last = fixes_.back();
+  v_cv_ = (p - last.p) / std::max(1e-3, toSeconds(frame.utime - last.utime));
+  fixes_.push_back({frame.utime, R, p});
+  if (!rebuilt_ && fixes_.size() == 2) rebuildMap();
+  else insert(points_, R, p);
+  Solution s;
+  solved_ = solve(s) && accept(s);
+  if (solved_) solution_ = s;
+  return solved_;
+}
+
+void MotionInitializer::integrate(Utime t, Mat3& R, Vec3& dv, Vec3& alpha) const {
+  R = Mat3::Identity();
+  dv = alpha = Vec3::Zero();
+  const Utime t0 = fixes_.front().utime;
+  for (std::size_t i = 0; i + 1 < samples_.size(); ++i) {
+    const Utime a = std::max(samples_[i].utime, t0), b = std::min(samples_[i + 1].utime, t);
+    if (b <= a) continue;
+    const double dt = toSeconds(b - a);
+    const Vec3 w = 0.5 * (samples_[i].gyro + samples_[i + 1].gyro);
+    const Vec3 acc = R * (0.5 * (samples_[i].accel + samples_[i + 1].accel) * accel_scale_);
+    alpha += dv * dt + 0.5 * acc * dt * dt;
+    dv += acc * dt;
+    R = R * expSO3(w * dt);
   }
-  // The throwaway map grows with the registered scans (never with an unregistered one after the first).
-  if (!map_started_ || updates_ > 0) {
-    std::vector<PointWithCov> world;
-    world.reserve(points_.size());
-    for (const auto& bp : points_) world.push_back({x_.R_world_imu * bp.p_imu + x_.p_world_imu, worldPointCovariance(x_, P_, bp)});
-    map_->insert(world);
-    map_started_ = true;
+}
+
+bool MotionInitializer::solve(Solution& s) const {
+  if (static_cast<int>(fixes_.size()) < cfg_.min_updates + 1) return false;
+  // Rows p_k - alpha_k = [tau I, tau^2/2 I] [v0; g], k >= 1 (the first fix is the origin).
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  Mat6 N = Mat6::Zero();
+  Vec6 rhs = Vec6::Zero();
+  std::vector<std::pair<double, Vec3>> rows;
+  for (std::size_t k = 1; k < fixes_.size(); ++k) {
+    const double tau = toSeconds(fixes_[k].utime - fixes_.front().utime);
+    Mat3 R;
+    Vec3 dv, alpha;
+    integrate(fixes_[k].utime, R, dv, alpha);
+    Eigen::Matrix<double, 3, 6> A;
+    A << Mat3::Identity() * tau, Mat3::Identity() * (0.5 * tau * tau);
+    const Vec3 b = fixes_[k].p - alpha;
+    N += A.transpose() * A;
+    rhs += A.transpose() * b;
+    rows.emplace_back(tau, b);
   }
-  return converged();
+  const Eigen::LDLT<Mat6> ldlt(N);
+  if (ldlt.info() != Eigen::Success || ldlt.rcond() < 1e-12) return false;
+  const Vec6 x = ldlt.solve(rhs);
+  if (!x.allFinite() || x.tail<3>().norm() < 1.0) return false;
+  // |g| known: fix it and solve v0 again.
+  s.g = x.tail<3>().normalized() * imu_.gravity_m_s2;
+  double tt = 0;
+  Vec3 tv = Vec3::Zero();
+  for (const auto& [tau, b] : rows) {
+    tt += tau * tau;
+    tv += tau * (b - 0.5 * tau * tau * s.g);
+  }
+  s.v0 = tv / tt;
+  double sq = 0;
+  for (const auto& [tau, b] : rows) sq += (b - s.v0 * tau - 0.5 * tau * tau * s.g).squaredNorm();
+  s.rms = std::sqrt(sq / (3.0 * double(rows.size())));
+  const double sp = fixSigma(lio_);
+  s.cov = ldlt.solve(Mat6::Identity()) * sp * sp;
+  return true;
+}
+
+bool MotionInitializer::accept(const Solution& s) const {
+  if (s.rms > 3.0 * fixSigma(lio_)) return false;  // the fixes do not fit one motion: registration failed
+  const double tau = toSeconds(fixes_.back().utime - fixes_.front().utime);
+  Eigen::Matrix<double, 3, 6> J;
+  J << Mat3::Identity(), Mat3::Identity() * tau;  // v(tau) = v0 + g tau + dv
+  const Mat3 cov_v = J * s.cov * J.transpose();
+  const Vec3 gd = s.g.normalized();
+  const Mat3 across = Mat3::Identity() - gd * gd.transpose();
+  const Mat3 cov_g = across * s.cov.bottomRightCorner<3, 3>() * across;
+  const double sigma_v = std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(cov_v).eigenvalues().maxCoeff());
+  const double sigma_tilt =
+      std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_g).eigenvalues().maxCoeff())) / s.g.norm();
+  return sigma_v < cfg_.max_speed_sigma_mps && sigma_tilt < cfg_.max_tilt_sigma_deg * M_PI / 180.0;
 }
 
 void MotionInitializer::takeOver(NavState& x, StateCov& P) {
-  alignToGravity();
-  x = x_;
-  P = P_;
-  map_.reset();  // the throwaway map is not needed any more
+  const Fix& f = fixes_.back();
+  const double tau = toSeconds(f.utime - fixes_.front().utime);
+  Mat3 R_imu;
+  Vec3 dv, alpha;
+  integrate(f.utime, R_imu, dv, alpha);
+  x = NavState();
+  x.utime = f.utime;
+  x.R_world_imu = f.R;
+  x.p_world_imu = f.p;
+  x.v_world = solution_.v0 + solution_.g * tau + dv;
+  x.g_world = solution_.g;
+  using namespace sidx;
+  P = initialCovariance();
+  P.block<3, 3>(kRot, kRot) = Mat3::Identity() * 1e-6;  // registered
+  P.block<3, 3>(kPos, kPos) = Mat3::Identity() * 1e-6;
+  Eigen::Matrix<double, 3, 6> J;
+  J << Mat3::Identity(), Mat3::Identity() * tau;
+  P.block<3, 3>(kVel, kVel) = J * solution_.cov * J.transpose();
+  P.block<3, 3>(kGrav, kGrav) = solution_.cov.bottomRightCorner<3, 3>();
+  P.block<3, 3>(kVel, kGrav) = J * solution_.cov.rightCols<3>();
+  P.block<3, 3>(kGrav, kVel) = P.block<3, 3>(kVel, kGrav).transpose();
+  P.block<3, 3>(kBg, kBg) = Mat3::Identity() * imu_.init_gyro_bias_sigma_rad_s * imu_.init_gyro_bias_sigma_rad_s;
+  P.block<3, 3>(kBa, kBa) = Mat3::Identity() * imu_.init_accel_bias_sigma_mps2 * imu_.init_accel_bias_sigma_mps2;
+  if (imu_.gravity_align) {
+    // World rotated so that gravity points along -z: position, velocity and gravity rotate; the
+    // rotation error is in the body frame.
+    const Mat3 A = Quat::FromTwoVectors(x.g_world.normalized(), Vec3(0, 0, -1)).toRotationMatrix();
+    x.R_world_imu = A * x.R_world_imu;
+    x.p_world_imu = A * x.p_world_imu;
+    x.v_world = A * x.v_world;
+    x.g_world = A * x.g_world;
+    StateCov T = StateCov::Identity();
+    for (int b : {kPos, kVel, kGrav}) T.block<3, 3>(b, b) = A;
+    P = T * P * T.transpose();
+  }
+  map_.reset();
 }
 
-bool MotionInitializer::converged() const {
-  if (updates_ < cfg_.min_updates) return false;
-  using namespace sidx;
-  const double var_v = Eigen::SelfAdjointEigenSolver<Mat3>(P_.block<3, 3>(kVel, kVel)).eigenvalues().maxCoeff();
-  // Direction error of g: its covariance across g, over |g|^2.
-  const Vec3 gd = x_.g_world.normalized();
-  const Mat3 across = Mat3::Identity() - gd * gd.transpose();
-  const Mat3 Pg = across * P_.block<3, 3>(kGrav, kGrav) * across.transpose();
-  const double var_tilt =
-      Eigen::SelfAdjointEigenSolver<Mat3>(Pg).eigenvalues().maxCoeff() / x_.g_world.squaredNorm();
-  const double max_tilt = cfg_.max_tilt_sigma_deg * M_PI / 180.0;
-  return std::sqrt(var_v) < cfg_.max_speed_sigma_mps && std::sqrt(var_tilt) < max_tilt;
-}
-
-void MotionInitializer::alignToGravity() {
-  if (!imu_.gravity_align) return;
-  const Mat3 R = Quat::FromTwoVectors(x_.g_world.normalized(), Vec3(0, 0, -1)).toRotationMatrix();
-  x_.R_world_imu = R * x_.R_world_imu;
-  x_.p_world_imu = R * x_.p_world_imu;
-  x_.v_world = R * x_.v_world;
-  x_.g_world = R * x_.g_world;
-  // The rotation error is in the body frame (unchanged); position, velocity and gravity rotate.
-  using namespace sidx;
-  StateCov J = StateCov::Identity();
-  for (int b : {kPos, kVel, kGrav}) J.block<3, 3>(b, b) = R;
-  P_ = J * P_ * J.transpose();
+bool MotionInitializer::atRestSince(Utime from, double tolerance_m, bool& known) const {
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  int n = 0;
+  for (const Fix& f : fixes_) {
+    if (f.utime < from) continue;
+    lo = lo.cwiseMin(f.p);
+    hi = hi.cwiseMax(f.p);
+    ++n;
+  }
+  known = n >= 2;
+  return known && (hi - lo).norm() <= tolerance_m;
 }
 
 std::string MotionInitializer::describe() const {
-  using namespace sidx;
   std::ostringstream os;
-  os << "IMU initialised in motion after " << frames_ << " frames (" << updates_
-     << " LiDAR updates on a throwaway map): speed " << x_.v_world.norm() << " m/s (sigma "
-     << std::sqrt(P_.block<3, 3>(kVel, kVel).diagonal().maxCoeff()) << "), gravity " << x_.g_world.norm()
-     << " m/s^2, gyro bias [" << x_.bg.transpose() << "] rad/s, accel scale " << accel_scale_;
+  const double tau = toSeconds(fixes_.back().utime - fixes_.front().utime);
+  Mat3 R;
+  Vec3 dv, alpha;
+  integrate(fixes_.back().utime, R, dv, alpha);
+  os << "IMU initialised in motion from " << fixes_.size() << " LiDAR fixes over " << tau
+     << " s (gravity and velocity by least squares, residual RMS " << solution_.rms * 100 << " cm): speed "
+     << (solution_.v0 + solution_.g * tau + dv).norm() << " m/s, accel scale " << accel_scale_;
   return os.str();
 }
 

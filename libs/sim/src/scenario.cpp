@@ -109,7 +109,10 @@ void SimScenario::validate() const {
   check(tr.max_rot_dps > 1.0, "trajectory.max_rot_dps", "must be > 1");
   check(tr.max_accel_mps2 > 0.0, "trajectory.max_accel_mps2", "must be > 0");
   check(tr.static_s >= 0.0, "trajectory.static_s", "must be >= 0");
-  check(tr.ramp_s > 0.0, "trajectory.ramp_s", "must be > 0");
+  // ramp_s 0 only with static_s 0: cruise from the first sample (a start in motion); a ramp of 0 after
+  // a rest would be a velocity step.
+  check(tr.ramp_s > 0.0 || (tr.ramp_s == 0.0 && tr.static_s == 0.0), "trajectory.ramp_s",
+        "must be > 0 (or 0 together with static_s: 0, moving from the first sample)");
   check(tr.size_m.minCoeff() >= 0.0, "trajectory.size_m", "must be >= 0");
   check(tr.height_m >= 0.0, "trajectory.height_m", "must be >= 0");
   check(tr.corner_radius_m >= 0.0, "trajectory.corner_radius_m", "must be >= 0");

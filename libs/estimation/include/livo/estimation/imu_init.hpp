@@ -8,7 +8,9 @@
 // smallest ratio of RMS deviation to threshold) is used, once the calm ends (a window in motion
 // follows) or init_static_wait_s after the first sample, whichever comes first. A window in motion is
 // never used: when none is static by then, noStaticWindow() says so and the odometry initialises
-// from motion (lio_odometry.hpp); later static windows are still taken if they come first.
+// from motion (lio_odometry.hpp); later static windows are still taken if they come first. An IMU
+// cannot tell rest from constant velocity: the odometry confirms a chosen window with the LiDAR
+// (motion_init.hpp) and reject()s it when the rig moved.
 //
 // The state is at the end of the chosen window: gyro bias = mean gyro, gravity from the mean
 // specific force (its norm also gives the accelerometer scale: g-unit IMUs), zero velocity. The
@@ -41,6 +43,11 @@ class ImuInitializer {
   NavState initialState() const { return state_; }
   /// Prior covariance from what the window observed (see the file comment).
   StateCov initialCovariance() const;
+  /// The chosen window was not rest after all (the LiDAR saw the rig move: constant velocity looks
+  /// like rest to an IMU): forget it; noStaticWindow() from now on, later windows are still tested.
+  void reject();
+  /// Start time of the chosen window.
+  Utime windowStart() const { return best_.start; }
   /// Samples after the chosen window (the odometry propagates the state through them).
   std::vector<ImuSample> samplesAfterWindow() const;
   /// Time of the first sample (-1 before any).
@@ -52,7 +59,7 @@ class ImuInitializer {
     Vec3 mean_gyro = Vec3::Zero(), mean_accel = Vec3::Zero();
     double rms_gyro = 0, rms_accel = 0, scale = 1.0;
     double score = 0;  ///< max(rms_gyro / gyro threshold, rms_accel / accel threshold); static below 1
-    Utime end = 0;
+    Utime start = 0, end = 0;
     int n = 0;
   };
   bool windowStats(WindowStats& w) const;  ///< the last init_samples samples; false without gravity

@@ -89,11 +89,16 @@ class LioOdometry {
   /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
   /// propagator when one of them is done.
   InitStep initialise(const Frame& frame);
+  enum class Rest { Confirmed, Moved, Unknown, Unconfirmable };
+  /// Whether the LiDAR saw the rig at rest during the static window the IMU chose.
+  Rest confirmRest(const Frame& frame);
+  void initAtRest(const Frame& frame);
 
   LioOdometryConfig cfg_;
   ImuInitializer init_;
   std::unique_ptr<MotionInitializer> motion_;  ///< until initialised
   bool initialized_ = false;
+  int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
   std::unique_ptr<ImuPropagator> propagator_;
   NavState x_;
   StateCov P_ = initialCovariance();

@@ -1,23 +1,28 @@
 // Initialisation from motion, for a rig that does not rest at start (ImuInitializer found no static
-// window within imu.init_static_wait_s).
+// window within imu.init_static_wait_s, or the LiDAR saw the "static" window move).
 //
-// Method: the ESIKF of the odometry itself, run from the first frame on a throwaway voxel map, with
-// priors that say what is not known: the world is the first IMU frame (R = I, p = 0), the velocity
-// is unknown (sigma init_motion_speed_sigma_mps), gravity is the mean specific force of the first
-// samples scaled to g with a wide prior (the rig accelerates: init_motion_gravity_sigma_mps2 per
-// axis), the gyro bias 0 (init_gyro_bias_sigma_rad_s), the accelerometer bias 0
-// (init_accel_bias_sigma_mps2). Each frame is propagated, undistorted and registered to the
-// throwaway map of the frames before (point-to-plane, as always), which makes velocity, gravity and
-// the gyro bias observable within a few frames (p_k = p_0 + v_0 t + g t^2 / 2 + the double integral
-// of the rotated specific force: the filter solves this least-squares problem recursively). Once
-// at least init_motion_min_updates LiDAR updates were accepted and the velocity sigma is below
-// init_motion_max_speed_sigma_mps and the gravity direction's below init_motion_max_tilt_sigma_deg,
-// the state is handed over: the world is rotated so that gravity points along -z (gravity_align),
-// and the odometry's real map starts with that frame's scan, undistorted with the converged motion.
-// The accelerometer scale (g units or m/s^2) is taken from the magnitude class of the first
-// samples' mean specific force (|a| < 4: g units).
+// Method (two steps, from the first frame on):
+//  1. LiDAR odometry on a throwaway voxel map: each frame's rotation is predicted by integrating the
+//     gyro (bias 0), its position by constant velocity from the last two fixes; the sweep is
+//     undistorted along that motion and registered point-to-plane (the odometry's own iterated
+//     update, with priors of init_motion_rot_sigma_deg on the rotation and init_motion_pos_sigma_m
+//     on the position and nothing else free). The map is rebuilt once the second fix gives a
+//     velocity, so that the first scan is undistorted too.
+//  2. Gravity and velocity by least squares over the IMU between the fixes: in the first IMU frame,
+//     p_k = v_0 t_k + g t_k^2 / 2 + alpha_k, alpha_k the double integral of the gyro-rotated specific
+//     force from the first fix (t_k measured from it); rows weighted by the fix sigma
+//     (2 lidar.range_noise_m). |g| is then fixed to gravity_m_s2 and v_0 solved again.
+// The result is taken once at least init_motion_min_updates fixes were registered, the residual RMS
+// is within 3 fix sigmas, and the sigmas of the current velocity and of the gravity direction are
+// below init_motion_max_speed_sigma_mps and init_motion_max_tilt_sigma_deg. The world is then
+// rotated so that gravity points along -z (gravity_align); the gyro bias starts at 0 with the prior
+// init_gyro_bias_sigma_rad_s, the accelerometer bias at 0 with init_accel_bias_sigma_mps2. The
+// accelerometer scale (g units or m/s^2) is taken from the magnitude class of the first samples'
+// mean specific force (|a| < 4: g units). The fixes also tell whether the rig was at rest during a
+// static IMU window (atRestSince): an IMU alone cannot tell rest from constant velocity.
 #pragma once
 
+#include "livo/common/config.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/estimation/state.hpp"
@@ -31,11 +36,12 @@
 namespace livo {
 
 struct MotionInitConfig {
-  double speed_sigma_mps = 2.0;       ///< imu.init_motion_speed_sigma_mps: prior sigma of the unknown velocity
-  double gravity_sigma_mps2 = 2.0;    ///< imu.init_motion_gravity_sigma_mps2: prior sigma per axis of gravity
-  int min_updates = 5;                ///< imu.init_motion_min_updates: accepted LiDAR updates before handover
-  double max_speed_sigma_mps = 0.05;  ///< imu.init_motion_max_speed_sigma_mps: velocity sigma for handover
-  double max_tilt_sigma_deg = 0.5;    ///< imu.init_motion_max_tilt_sigma_deg: gravity direction sigma for handover
+  double rot_sigma_deg = 2.0;         ///< imu.init_motion_rot_sigma_deg: registration prior on the gyro rotation
+  double pos_sigma_m = 0.5;           ///< imu.init_motion_pos_sigma_m: registration prior on the predicted position
+  int min_updates = 5;                ///< imu.init_motion_min_updates: registered fixes before the result is taken
+  double max_speed_sigma_mps = 0.05;  ///< imu.init_motion_max_speed_sigma_mps
+  double max_tilt_sigma_deg = 0.5;    ///< imu.init_motion_max_tilt_sigma_deg
+  double max_window_s = 10.0;         ///< imu.init_motion_max_window_s: fixes and samples kept (oldest dropped)
   void load(const ConfigNode& imu);   ///< keys of the `imu` section
 };
 
@@ -49,19 +55,39 @@ class MotionInitializer {
   /// Runs one frame (time order). Returns converged(): the caller may then takeOver() (or go on
   /// feeding frames, e.g. while a static window may still come).
   bool process(const Frame& frame);
-  /// Enough LiDAR updates, velocity and gravity direction known well enough (see the file comment).
-  bool converged() const;
-  /// The converged state, rotated so that gravity points along -z (gravity_align), and its
-  /// covariance; points() are the last frame's points (IMU frame at its time).
+  bool converged() const { return solved_; }
+  /// The state at the last frame, world rotated to gravity (gravity_align), with its covariance;
+  /// points() are the last frame's points (IMU frame at its time).
   void takeOver(NavState& x, StateCov& P);
+  /// Whether the LiDAR saw the rig at rest since `from`: the fixes since then stay within
+  /// `tolerance_m` of each other. `known` is false with fewer than two fixes there.
+  bool atRestSince(Utime from, double tolerance_m, bool& known) const;
   double accelScale() const { return accel_scale_; }
   std::vector<BodyPoint>& points() { return points_; }
-  int updates() const { return updates_; }
+  int fixes() const { return static_cast<int>(fixes_.size()); }
   std::string describe() const;
 
  private:
+  struct Fix {
+    Utime utime;
+    Mat3 R;  ///< registered rotation (first IMU frame = world)
+    Vec3 p;
+  };
+  struct Solution {
+    Vec3 v0 = Vec3::Zero(), g = Vec3::Zero();
+    Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
+    double rms = 0.0;
+  };
   bool start(const Frame& frame);
-  void alignToGravity();
+  /// Gyro rotation, constant-velocity position trace over the frame's samples from the last fix.
+  std::vector<ImuTracePoint> predictTrace(const Frame& frame, Mat3& R_pred, Vec3& p_pred) const;
+  bool registerFrame(const Mat3& R_pred, const Vec3& p_pred, Mat3& R, Vec3& p) const;
+  void insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p);
+  void rebuildMap();
+  /// Double integral alpha and single integral dv of the rotated specific force from the first fix.
+  void integrate(Utime t, Mat3& R, Vec3& dv, Vec3& alpha) const;
+  bool solve(Solution& s) const;
+  bool accept(const Solution& s) const;
 
   ImuConfig imu_;
   MotionInitConfig cfg_;
@@ -69,13 +95,16 @@ class MotionInitializer {
   int min_matches_;
   PreparePoints prepare_;
   std::unique_ptr<VoxelMap> map_;
-  std::unique_ptr<ImuPropagator> propagator_;
-  NavState x_;
-  StateCov P_ = StateCov::Identity();
   double accel_scale_ = 1.0;
-  bool started_ = false, map_started_ = false;
-  int updates_ = 0, frames_ = 0;
+  bool started_ = false, solved_ = false, rebuilt_ = false;
+  Vec3 v_cv_ = Vec3::Zero();       ///< constant velocity of the last two fixes (world = first IMU frame)
+  std::vector<ImuSample> samples_; ///< since the first fix
+  std::vector<Fix> fixes_;
+  LidarScan first_sweep_;          ///< re-undistorted when the map is rebuilt
+  Frame first_frame_imu_;          ///< the first frame's IMU samples (for its trace)
+  Solution solution_;
   std::vector<BodyPoint> points_;
+  Utime last_utime_ = 0;
 };
 
 }  // namespace livo
