@@ -578,3 +578,26 @@ TEST(LioUpdate, KittiScansRegisterToMapOfPreviousScans) {
     map.insert(toWorld(scan, poses[static_cast<std::size_t>(i)]));
   }
 }
+
+namespace {
+std::string imuConfigError(const std::string& yaml) {
+  auto f = livo::ConfigFile::parse(yaml, "rig.yaml");
+  livo::ImuConfig c;
+  try {
+    c.load(f.root().section("imu"));
+  } catch (const livo::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(ImuConfig, RefusesZeroOrAbsurdDensitiesAndTheRemovedKey) {
+  EXPECT_EQ(imuConfigError("imu:\n  gyro_noise: 1.0e-3\n"), "");
+  EXPECT_NE(imuConfigError("imu:\n  gyro_noise: 0\n").find("imu.gyro_noise: must be > 0"), std::string::npos);
+  // 5 deg/s/sqrt(Hz) typed in a rad key: no real IMU is that noisy.
+  EXPECT_NE(imuConfigError("imu:\n  accel_noise: 20\n").find("imu.accel_noise"), std::string::npos);
+  const std::string removed = imuConfigError("imu:\n  init_max_samples: 2000\n");
+  EXPECT_NE(removed.find("imu.init_max_samples"), std::string::npos) << removed;
+  EXPECT_NE(removed.find("init_static_wait_s"), std::string::npos) << removed;
+}

@@ -236,7 +236,12 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   counters["map_pcd_points"] = double(sink.cloud.size());
   addStatsCounters(pst, hs.counters, counters);
   counters["map_bt_scans_dropped"] = double(sink.occupancy.scansDropped());
-  counters["images_wrong_size"] = double(pipeline.imagesWrongSize());
+  const ImageCheckCounters& ic = pipeline.frames().imageCounters();
+  counters["images_wrong_size"] = double(ic.wrong_size);
+  counters["images_black"] = double(ic.black);
+  counters["images_saturated"] = double(ic.saturated);
+  counters["images_frozen"] = double(ic.frozen);
+  counters["images_missing"] = double(ic.missing);
   const double rss = bytesToMb(peakRssBytes());
   std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
                                            {"log", args.log}, {"config", args.config}};

@@ -2,6 +2,7 @@
 
 #include "livo/common/timing.hpp"
 #include "livo/estimation/visual_step.hpp"
+#include "livo/map/frustum_keys.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -27,7 +28,10 @@ HybridMapConfig PipelineConfig::mapConfig() const {
 }
 
 FramePipeline::FramePipeline(PipelineConfig cfg)
-    : cfg_(std::move(cfg)), lio_(cfg_.lio), selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)) {
+    : cfg_(std::move(cfg)),
+      lio_(cfg_.lio),
+      selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)),
+      image_check_(cfg_.vio.pixel_noise) {
   if (cfg_.camera.enabled) camera_ = CameraModel::create(cfg_.camera);
 }
 
@@ -43,11 +47,14 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
     // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
     const PlaneFinder& planes = map.planesFor(frame, r);
     lidarStep(map, planes, r);
-    // 4. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a row.
-    r.degenerate = selector_.degenerate(r.lio.n_matched > 0, r.lio.sigma_min);
+    // 4. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a
+    // row, or a LiDAR update that failed (the camera is then the only exteroceptive sensor left).
+    // A map existed around the scan and the update failed.
+    r.lidar_failed = lio_.mapStarted() && !r.lio.lio_ok && !r.lio.map_started && !r.map_seeded;
+    r.degenerate = selector_.degenerate(r.lio.n_matched > 0, r.lio.sigma_min) || r.lidar_failed;
     // 5-6. Frame selection; on a selected image the photometric update and the visual map changes.
-    if (gray != nullptr && r.lio.lio_ok && selector_.select(r.lio.state, r.lio.sigma_min, r.degenerate))
-      visualStep(frame, *gray, map, r);
+    if (gray != nullptr && selector_.select(r.lio.state, r.lio.sigma_min, r.degenerate))
+      visualStep(frame, *gray, map, r, r.lidar_failed);
   }
   // 7. The frame's end at its final state: slides and the memory cap in process, the update message
   // to the map server. Visual point pointers of this frame are not used beyond this point.
@@ -57,48 +64,74 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
 }
 
 const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, FrameResult& r) {
-  if (!camera_ || !frame.has_image) return nullptr;
-  const Image& img = frame.image;
-  if (img.width == camera_->width() && img.height == camera_->height()) return &img;
-  // The calibrated size with a processing scale: resized; any other size is not the calibrated
-  // camera's and is never read with this model (counted).
-  if (std::abs(cfg_.camera.scale - 1.0) < 1e-12 || img.width != cfg_.camera.width || img.height != cfg_.camera.height) {
-    ++images_wrong_size_;
-    r.image_wrong_size = true;
+  if (!camera_) return nullptr;
+  const auto fail = [&](ImageStatus s) -> const Image* {
+    r.image = s;
+    image_counters_.count(s);
     return nullptr;
+  };
+  if (!frame.has_image) return cfg_.preprocess.camera_enabled ? fail(ImageStatus::Missing) : nullptr;
+  const Image& img = frame.image;
+  const Image* gray = &img;
+  if (img.width != camera_->width() || img.height != camera_->height()) {
+    // The calibrated size with a processing scale: resized; any other size is not the calibrated
+    // camera's and is never read with this model.
+    if (std::abs(cfg_.camera.scale - 1.0) < 1e-12 || img.width != cfg_.camera.width || img.height != cfg_.camera.height)
+      return fail(ImageStatus::WrongSize);
+    const cv::Mat src(img.height, img.width, CV_8UC1, const_cast<std::uint8_t*>(img.data.data()),
+                      static_cast<std::size_t>(img.row_stride));
+    cv::Mat dst;
+    cv::resize(src, dst, cv::Size(camera_->width(), camera_->height()), 0, 0, cv::INTER_AREA);
+    scratch.utime = img.utime;
+    scratch.width = dst.cols;
+    scratch.height = dst.rows;
+    scratch.row_stride = dst.cols;
+    scratch.data.assign(dst.datastart, dst.dataend);
+    gray = &scratch;
   }
-  const cv::Mat src(img.height, img.width, CV_8UC1, const_cast<std::uint8_t*>(img.data.data()),
-                    static_cast<std::size_t>(img.row_stride));
-  cv::Mat dst;
-  cv::resize(src, dst, cv::Size(camera_->width(), camera_->height()), 0, 0, cv::INTER_AREA);
-  scratch.utime = img.utime;
-  scratch.width = dst.cols;
-  scratch.height = dst.rows;
-  scratch.row_stride = dst.cols;
-  scratch.data.assign(dst.datastart, dst.dataend);
-  return &scratch;
+  const ImageStatus s = image_check_.check(*gray);
+  return s == ImageStatus::Ok ? gray : fail(s);
 }
 
 void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {
   lio_.update(r.lio, planes);
   r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
-  // As in the reference, the map grows every frame (a failed update inserts at the IMU prediction).
+  // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
+  // alone put it. Except where the map holds nothing around the scan (the first scan, new
+  // territory, an empty map server): there the scan seeds the map.
   if (r.lio.points.empty()) return;
+  if (lio_.mapStarted() && !r.lio.lio_ok) {
+    if (map.holdsAround(r)) return;
+    r.map_seeded = true;
+  }
   Stopwatch map_watch;
   map.insertScan(lio_.worldPoints(r.lio.points), r);
   lio_.markInserted(r.lio);
   r.lio.map_ms = map_watch.elapsedMs();
 }
 
-void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r) {
+void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r,
+                               bool lidar_failed) {
   Stopwatch watch;
   const double wait_before = r.link.wait_ms;
-  VisualMapOps* ops = map.visualMap(frame, r);
+  // Without a registered scan, the visual points come from the voxels the camera sees (up to the
+  // LiDAR's range: visual points are made from LiDAR points), new ones from ray casting into the
+  // map's planes.
+  NoScanRetrieval no_scan;
+  if (lidar_failed) {
+    no_scan.max_depth_m = cfg_.preprocess.max_range_m;
+    no_scan.ray_step_m = 0.5 * cfg_.lio.map.voxel_size_m;
+    no_scan.min_depth_m = cfg_.visual_map.min_depth_m;
+    no_scan.frustum_keys =
+        frustumVoxelKeys(*camera_, r.lio.state.pose() * cfg_.camera.T_imu_camera, cfg_.visual_map.voxel_size_m,
+                         cfg_.visual_map.grid_cell_px, cfg_.visual_map.min_depth_m, no_scan.max_depth_m);
+  }
+  VisualMapOps* ops = map.visualMap(frame, r, lidar_failed ? &no_scan.frustum_keys : nullptr);
   if (ops == nullptr) return;  // no visual update without the map's points
   NavState x = r.lio.state;
   StateCov P = r.lio.P;
-  const VisualStepResult vs =
-      runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio, frame.utime, r.lio);
+  const VisualStepResult vs = runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio,
+                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr);
   if (vs.update.points_used > 0) lio_.setState(x, P);
   selector_.markUsed(x);
   r.visual_used = true;

@@ -15,6 +15,9 @@ void ImuConfig::load(const ConfigNode& n) {
   n.get("init_vibration_gyro_rad_s", init_vibration_gyro_rad_s).get("init_vibration_accel_mps2", init_vibration_accel_mps2);
   n.get("init_max_gyro_std", init_max_gyro_std).get("init_max_accel_std", init_max_accel_std);
   n.get("init_static_wait_s", init_static_wait_s);
+  n.check(!n.has("init_max_samples"), "init_max_samples",
+          "was removed (issue #13): without a static window the estimator initialises from motion after "
+          "init_static_wait_s seconds; replace it with init_static_wait_s");
   n.get("init_gyro_bias_sigma_rad_s", init_gyro_bias_sigma_rad_s).get("init_accel_bias_sigma_mps2", init_accel_bias_sigma_mps2);
   // Densities: positive (a zero density makes every covariance singular) and below values no real
   // IMU has (units: the key's; a typo of the unit, e.g. deg for rad, lands there).

@@ -116,10 +116,13 @@ StateCov ImuInitializer::initialCovariance() const {
   const double var_bg = cfg_.gyroSampleSigma() * cfg_.gyroSampleSigma() / n +
                         cfg_.gyro_bias_walk * cfg_.gyro_bias_walk * window_s;
   P.block<3, 3>(kBg, kBg) = Mat3::Identity() * var_bg;
-  // Roll and pitch from the mean specific force; yaw is the world's definition (a small floor keeps
-  // P positive definite). The rotation error is in the body frame: R^T diag(tilt, tilt, yaw) R.
-  const double sigma_tilt = cfg_.accelSampleSigma() / (cfg_.gravity_m_s2 * std::sqrt(n));
-  const double var_tilt = std::max(sigma_tilt * sigma_tilt, 1e-8), var_yaw = 1e-8;
+  // Roll and pitch from the mean specific force, as well as the accelerometer bias allows (at rest a
+  // horizontal bias and a tilt look the same); yaw is the world's definition (a small floor keeps P
+  // positive definite). The rotation error is in the body frame: R^T diag(tilt, tilt, yaw) R.
+  const double sigma_mean = cfg_.accelSampleSigma() / std::sqrt(n);
+  const double sigma_ba = cfg_.init_accel_bias_sigma_mps2;
+  const double var_tilt = std::max((sigma_mean * sigma_mean + sigma_ba * sigma_ba) / (cfg_.gravity_m_s2 * cfg_.gravity_m_s2), 1e-8);
+  const double var_yaw = 1e-8;
   const Mat3 R = state_.R_world_imu;
   P.block<3, 3>(kRot, kRot) = R.transpose() * Vec3(var_tilt, var_tilt, var_yaw).asDiagonal() * R;
   P.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.init_accel_bias_sigma_mps2 * cfg_.init_accel_bias_sigma_mps2;

@@ -90,13 +90,20 @@ const PlaneFinder& RemoteMap::planesFor(const Frame& frame, FrameResult& r) {
 
 void RemoteMap::insertScan(std::vector<PointWithCov> points, FrameResult&) { registered_ = std::move(points); }
 
-VisualMapOps* RemoteMap::visualMap(const Frame& frame, FrameResult& r) {
-  // The visual points of the visual voxels the registered scan touches (both server maps).
+VisualMapOps* RemoteMap::visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) {
+  // The visual points of the visual voxels the registered scan touches, or of the camera frustum
+  // when the LiDAR failed (both server maps). Not after this frame's first query went unanswered:
+  // a map server that does not answer would only cost a second wait.
+  if (r.link.map_timeout) return nullptr;
   MapQuery q = queryAt(frame, r);
   q.want_visual = true;
-  for (const PointWithCov& pw : registered_)
-    if (keyablePoint(pw.p_world, visual_voxel_size_m_))
-      q.visual_keys.push_back(VoxelKey::fromPoint(pw.p_world, visual_voxel_size_m_));
+  if (frustum_keys != nullptr) {
+    q.visual_keys = *frustum_keys;
+  } else {
+    for (const PointWithCov& pw : registered_)
+      if (keyablePoint(pw.p_world, visual_voxel_size_m_))
+        q.visual_keys.push_back(VoxelKey::fromPoint(pw.p_world, visual_voxel_size_m_));
+  }
   sortUnique(q.visual_keys);
   r.link.visual_keys = q.visual_keys.size();
   Submap sub;

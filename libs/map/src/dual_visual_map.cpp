@@ -14,9 +14,10 @@ DualVisualMap::DualVisualMap(const VisualMapConfig& config) : local_(config), lo
 
 std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                                       const std::vector<Vec3>& scan_points_world,
-                                                      std::vector<Vec2>* pixels) {
+                                                      std::vector<Vec2>* pixels,
+                                                      const std::vector<VoxelKey>* voxel_keys) {
   std::vector<Vec2> px_local;
-  std::vector<VisualPoint*> local = local_.pointsInView(cam, T_world_camera, scan_points_world, &px_local);
+  std::vector<VisualPoint*> local = local_.pointsInView(cam, T_world_camera, scan_points_world, &px_local, voxel_keys);
   retrieval_ = local_.lastRetrieval();
   occupied_ = local_.occupiedCells();
   retrieved_longterm_ = 0;
@@ -25,7 +26,7 @@ std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, co
     return local;
   }
   std::vector<Vec2> px_lt;
-  std::vector<VisualPoint*> lt = longterm_.pointsInView(cam, T_world_camera, scan_points_world, &px_lt);
+  std::vector<VisualPoint*> lt = longterm_.pointsInView(cam, T_world_camera, scan_points_world, &px_lt, voxel_keys);
   const VisualRetrievalStats& rs = longterm_.lastRetrieval();
   retrieval_.visual_voxels += rs.visual_voxels;
   retrieval_.searched_points += rs.searched_points;

@@ -58,7 +58,8 @@ ImageGrid VisualMap::gridFor(const CameraModel& cam) const {
 
 std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                                   const std::vector<Vec3>& scan_points_world,
-                                                  std::vector<Vec2>* pixels) {
+                                                  std::vector<Vec2>* pixels,
+                                                  const std::vector<VoxelKey>* voxel_keys) {
   const ImageGrid grid = gridFor(cam);
   occupied_.assign(std::size_t(grid.size()), false);
   retrieval_ = VisualRetrievalStats{};
@@ -66,19 +67,27 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
   std::vector<VisualPoint*> out;
   const Pose T_camera_world = T_world_camera.inverse();
 
-  // 1. Visual voxels touched by the scan (floor keys: no off-by-one for negative coordinates). Only
-  // voxels that exist in the visual hash are collected, then deduplicated (sort + unique).
+  // 1. Visual voxels touched by the scan (floor keys: no off-by-one for negative coordinates), or the
+  // given keys. Only voxels that exist in the visual hash are collected, then deduplicated (sort +
+  // unique).
   searched_.clear();
-  VoxelKey last;
-  bool have_last = false;
-  for (const Vec3& p : scan_points_world) {
-    if (!keyable(p, config_.voxel_size_m)) continue;
-    const VoxelKey k = keyOf(p);
-    if (have_last && k == last) continue;  // consecutive scan points mostly share a voxel
-    last = k;
-    have_last = true;
-    const auto it = voxels_.find(k);
-    if (it != voxels_.end()) searched_.push_back(&it->second);
+  if (voxel_keys != nullptr) {
+    for (const VoxelKey& k : *voxel_keys) {
+      const auto it = voxels_.find(k);
+      if (it != voxels_.end()) searched_.push_back(&it->second);
+    }
+  } else {
+    VoxelKey last;
+    bool have_last = false;
+    for (const Vec3& p : scan_points_world) {
+      if (!keyable(p, config_.voxel_size_m)) continue;
+      const VoxelKey k = keyOf(p);
+      if (have_last && k == last) continue;  // consecutive scan points mostly share a voxel
+      last = k;
+      have_last = true;
+      const auto it = voxels_.find(k);
+      if (it != voxels_.end()) searched_.push_back(&it->second);
+    }
   }
   std::sort(searched_.begin(), searched_.end());
   searched_.erase(std::unique(searched_.begin(), searched_.end()), searched_.end());

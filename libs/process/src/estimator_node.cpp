@@ -145,6 +145,7 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   if (f.visual_used) o.status |= odometry_status::kVisualUpdate;
   if (f.link.map_timeout) o.status |= odometry_status::kMapTimeout;
   if (f.lidarFailed()) o.status |= odometry_status::kLidarFailed;
+  if (f.lio.lio_ok) o.status |= odometry_status::kLidarUpdate;
   lcm_.publish(channels_.odometry, toMsg(o));
   ++counters_.odometry_published;
 
@@ -182,6 +183,9 @@ std::string EstimatorNode::summary() const {
      << double(counters_.update_bytes) / std::max<double>(1.0, double(counters_.frames)) << "\n";
   os << "voxel size mismatches " << map_.voxelSizeMismatches() << ", images of the wrong size "
      << pipeline_.imagesWrongSize() << ", non-finite points " << counters_.nonfinite_points << "\n";
+  const ImageCheckCounters& ic = pipeline_.imageCounters();
+  os << "camera failures: black " << ic.black << ", saturated " << ic.saturated << ", frozen " << ic.frozen
+     << ", missing " << ic.missing << "\n";
   os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();

@@ -280,13 +280,16 @@ bool Recombiner::nextFrame(Frame& out) {
       return true;
     }
 
-    // Camera mode. A scan end with no image within image_wait_timeout_s after it is a frame too.
+    // Camera mode. A scan end with no image within image_wait_timeout_s after it is a frame too, and
+    // so is one whose next image comes only after the next scan end (the camera skipped a LiDAR
+    // period, e.g. when it resumes after an outage): frames stay at the LiDAR rate.
     const bool have_image = !images_.empty();
     const Utime t_c = have_image ? images_.front().utime : 0;
     if (cfg_.image_wait_timeout_s > 0.0 && !scan_ends_.empty()) {
       const Utime e = scan_ends_.front();
-      if ((!have_image || t_c > e + fromSeconds(cfg_.image_wait_timeout_s)) &&
-          timedOut(e, cfg_.image_wait_timeout_s)) {
+      const bool skipped = have_image && scan_ends_.size() > 1 && t_c > scan_ends_[1];
+      if (skipped || ((!have_image || t_c > e + fromSeconds(cfg_.image_wait_timeout_s)) &&
+                      timedOut(e, cfg_.image_wait_timeout_s))) {
         if (!imuReaches(e) && !timedOut(e, cfg_.wait_timeout_s)) return false;
         cutFrame(e, false, out);
         return true;

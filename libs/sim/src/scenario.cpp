@@ -26,19 +26,34 @@ void LidarSimConfig::load(const ConfigNode& n) {
   n.get("max_range_m", max_range_m).get("blind_m", blind_m).get("max_incidence_deg", max_incidence_deg);
   n.get("beam_noise_deg", beam_noise_deg);
   n.get("points_per_second", points_per_second).get("beam_divergence_mrad", beam_divergence_mrad);
+  n.get("dropouts_s", dropouts_s);
+}
+
+void VibrationConfig::load(const ConfigNode& n) {
+  n.get("accel_mps2", accel_mps2).get("gyro_rad_s", gyro_rad_s).get("freq_hz", freq_hz);
+  n.check(accel_mps2 >= 0 && accel_mps2 < 100, "accel_mps2", "must be in [0, 100) m/s^2 (RMS)");
+  n.check(gyro_rad_s >= 0 && gyro_rad_s < 20, "gyro_rad_s", "must be in [0, 20) rad/s (RMS)");
+  n.check(freq_hz > 0 && freq_hz < 10000, "freq_hz", "must be in (0, 10000) Hz");
+}
+
+bool SimScenario::inDropout(const std::vector<double>& iv, double t) {
+  for (std::size_t i = 0; i + 1 < iv.size(); i += 2)
+    if (t >= iv[i] && t < iv[i + 1]) return true;
+  return false;
 }
 
 void ImuSimConfig::load(const ConfigNode& n) {
   n.get("rate_hz", rate_hz).get("gyro_noise", gyro_noise).get("accel_noise", accel_noise);
   n.get("gyro_bias_walk", gyro_bias_walk).get("accel_bias_walk", accel_bias_walk);
   n.get("gyro_bias_init", gyro_bias_init).get("accel_bias_init", accel_bias_init);
+  vibration.load(n.section("vibration"));
 }
 
 void CameraSimConfig::load(const ConfigNode& n) {
   n.get("enabled", enabled).get("model", model).get("width", width).get("height", height);
   n.get("fx", fx).get("fy", fy).get("cx", cx).get("cy", cy).get("distortion", distortion);
   n.get("max_angle_deg", max_angle_deg).get("rate_hz", rate_hz).get("phase_s", phase_s);
-  n.get("exposure_jitter", exposure_jitter).get("pixel_noise", pixel_noise);
+  n.get("exposure_jitter", exposure_jitter).get("pixel_noise", pixel_noise).get("dropouts_s", dropouts_s);
 }
 
 Eigen::Isometry3d ExtrinsicsConfig::defaultCamera() {
@@ -101,6 +116,14 @@ void SimScenario::validate() const {
   check(world.texture_tile_m > 0.0, "world.texture_tile_m", "must be > 0");
   check(world.texture_scale_m > 0.0, "world.texture_scale_m", "must be > 0");
   check(world.clutter >= 0.0 && world.clutter <= 1.0, "world.clutter", "must be in [0, 1]");
+
+  for (const auto& [key, iv] : {std::make_pair("lidar.dropouts_s", &lidar.dropouts_s),
+                                std::make_pair("camera.dropouts_s", &camera.dropouts_s)}) {
+    check(iv->size() % 2 == 0, key, "must be pairs [t0, t1, t0, t1, ...]");
+    for (std::size_t i = 0; i + 1 < iv->size(); i += 2)
+      check(std::isfinite((*iv)[i]) && (*iv)[i] >= 0 && (*iv)[i + 1] > (*iv)[i], key,
+            "every interval must have 0 <= t0 < t1 (seconds from the start)");
+  }
 
   const auto& tr = trajectory;
   check(oneOf(tr.kind, {"loop", "lissajous", "waypoints"}), "trajectory.kind",

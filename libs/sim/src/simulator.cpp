@@ -81,10 +81,32 @@ void Simulator::imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth) {
     s.gyro[a] = truth.gyro[a] + gyro_bias_[a] + sg * gaussianFromKeys(seed_, RngStream::ImuGyroNoise, kk, a);
     s.accel[a] = truth.accel[a] + accel_bias_[a] + sa * gaussianFromKeys(seed_, RngStream::ImuAccelNoise, kk, a);
   }
+  if (c.vibration.active()) addVibration(t, s);
   const double sq_dt = std::sqrt(1.0 / c.rate_hz);
   for (int a = 0; a < 3; ++a) {
     gyro_bias_[a] += c.gyro_bias_walk * sq_dt * gaussianFromKeys(seed_, RngStream::ImuGyroWalk, kk, a);
     accel_bias_[a] += c.accel_bias_walk * sq_dt * gaussianFromKeys(seed_, RngStream::ImuAccelWalk, kk, a);
+  }
+}
+
+// Four tones within +-10 % of the frequency per axis and sensor, seeded phases, RMS = the amplitude:
+// a sinusoid plus band-limited noise around it (half of the power in the centre tone).
+void Simulator::addVibration(double t, ImuSample& s) const {
+  const VibrationConfig& v = sc_.imu.vibration;
+  static constexpr double kOffsets[4] = {0.0, -0.07, 0.04, 0.1};
+  static constexpr double kPower[4] = {0.5, 0.2, 0.15, 0.15};
+  for (int a = 0; a < 3; ++a) {
+    double g = 0.0, acc = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      const double f = v.freq_hz * (1.0 + kOffsets[k]);
+      const double amp = std::sqrt(2.0 * kPower[k]);  // RMS of amp * sin = sqrt(power)
+      const double pg = 2.0 * M_PI * uniformFromHash(hashKeys(seed_, std::uint64_t(RngStream::ImuVibration), std::uint64_t(k), std::uint64_t(a)));
+      const double pa = 2.0 * M_PI * uniformFromHash(hashKeys(seed_, std::uint64_t(RngStream::ImuVibration), std::uint64_t(k + 8), std::uint64_t(a)));
+      g += amp * std::sin(2.0 * M_PI * f * t + pg);
+      acc += amp * std::sin(2.0 * M_PI * f * t + pa);
+    }
+    s.gyro[a] += v.gyro_rad_s * g;
+    s.accel[a] += v.accel_mps2 * acc;
   }
 }
 
@@ -244,23 +266,31 @@ Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
 }
 
 bool Simulator::next(SimEvent& ev) {
-  const Utime t_imu = imuUtime(next_imu_);
-  const Utime t_scan = lidarUtime(next_scan_);
-  const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
-  const Utime t = std::min({t_imu, t_scan, t_cam});
-  if (t >= end_) return false;
-  ev.utime = t;
-  if (t == t_imu) {
-    ev.kind = SimEvent::Kind::Imu;
-    imuSample(next_imu_++, ev.imu, ev.imu_truth);
-  } else if (t == t_scan) {
-    ev.kind = SimEvent::Kind::Lidar;
-    ev.scan = lidarScan(next_scan_++, &stats_);
-  } else {
+  for (;;) {
+    const Utime t_imu = imuUtime(next_imu_);
+    const Utime t_scan = lidarUtime(next_scan_);
+    const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
+    const Utime t = std::min({t_imu, t_scan, t_cam});
+    if (t >= end_) return false;
+    ev.utime = t;
+    if (t == t_imu) {
+      ev.kind = SimEvent::Kind::Imu;
+      imuSample(next_imu_++, ev.imu, ev.imu_truth);
+      return true;
+    }
+    if (t == t_scan) {
+      const std::int64_t j = next_scan_++;
+      if (SimScenario::inDropout(sc_.lidar.dropouts_s, relTime(t))) continue;  // a dropped scan
+      ev.kind = SimEvent::Kind::Lidar;
+      ev.scan = lidarScan(j, &stats_);
+      return true;
+    }
+    const std::int64_t k = next_image_++;
+    if (SimScenario::inDropout(sc_.camera.dropouts_s, relTime(t))) continue;  // a dropped image
     ev.kind = SimEvent::Kind::Image;
-    ev.image = renderImage(next_image_++, &ev.image_truth);
+    ev.image = renderImage(k, &ev.image_truth);
+    return true;
   }
-  return true;
 }
 
 void Simulator::run(const SimCallbacks& cb) {
@@ -276,10 +306,10 @@ void Simulator::run(const SimCallbacks& cb) {
       imuSample(next_imu_++, s, truth);  // always: the bias walk is sequential
       if (cb.imu) cb.imu(s, truth);
     } else if (t == t_scan) {
-      if (cb.lidar) cb.lidar(lidarScan(next_scan_, &stats_));
+      if (cb.lidar && !SimScenario::inDropout(sc_.lidar.dropouts_s, relTime(t))) cb.lidar(lidarScan(next_scan_, &stats_));
       ++next_scan_;
     } else {
-      if (cb.image) {
+      if (cb.image && !SimScenario::inDropout(sc_.camera.dropouts_s, relTime(t))) {
         ImageTruth truth;
         const Image img = renderImage(next_image_, &truth);
         cb.image(img, truth);

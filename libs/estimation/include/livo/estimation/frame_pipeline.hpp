@@ -5,7 +5,8 @@
 //   1. initialise from the IMU, propagate to the frame time, undistort and downsample the sweep;
 //   2. the planes around the predicted scan (map access);
 //   3. the iterated point-to-plane LiDAR update; the registered points go into the map;
-//   4. degeneracy of the matched plane normals (sigma_min, several frames in a row);
+//   4. degeneracy of the matched plane normals (sigma_min, several frames in a row); a frame whose
+//      LiDAR update failed counts as degenerate (and its scan does not go into the map);
 //   5. frame selection (adaptive: keyframes unless degenerate; all; off);
 //   6. on a selected image: the photometric update and the visual map's changes;
 //   7. the frame's end at its final state (map maintenance, or the update message to the map server).
@@ -15,6 +16,7 @@
 
 #include "livo/estimation/frame_result.hpp"
 #include "livo/estimation/frame_selector.hpp"
+#include "livo/estimation/image_check.hpp"
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/estimation/map_access.hpp"
 #include "livo/estimation/pipeline_config.hpp"
@@ -39,22 +41,26 @@ class FramePipeline {
   const LioOdometry& odometry() const { return lio_; }
   std::size_t framesProcessed() const { return frames_; }
   /// Frame images whose size does not match the camera calibration (never used by the visual update).
-  std::size_t imagesWrongSize() const { return images_wrong_size_; }
+  std::size_t imagesWrongSize() const { return image_counters_.wrong_size; }
+  /// Camera failures per kind (image_check.hpp): images never used by the visual update.
+  const ImageCheckCounters& imageCounters() const { return image_counters_; }
 
  private:
   /// The frame's image at the processing scale in `scratch` or the frame itself; null without a
-  /// camera or an image, or when the image is not the calibrated camera's (counted).
+  /// camera or an image, or when the image failed a check (image_check.hpp; counted in r.image).
   const Image* frameImage(const Frame& frame, Image& scratch, FrameResult& r);
   /// Step 3: LiDAR update against `planes`, then the registered points into the map.
   void lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r);
-  /// Step 6 on `gray`, the frame's image at the processing scale.
-  void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r);
+  /// Step 6 on `gray`, the frame's image at the processing scale (`lidar_failed`: retrieval from the
+  /// camera frustum instead of the scan).
+  void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r, bool lidar_failed);
 
   PipelineConfig cfg_;
   LioOdometry lio_;
   FrameSelector selector_;
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
-  std::size_t images_wrong_size_ = 0;
+  ImageCheck image_check_;
+  ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;
 };
 

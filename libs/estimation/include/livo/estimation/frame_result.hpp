@@ -1,6 +1,7 @@
 // What one frame of the per-frame pipeline (frame_pipeline.hpp) produced.
 #pragma once
 
+#include "livo/estimation/image_check.hpp"
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/map/hybrid_map.hpp"
 
@@ -32,13 +33,16 @@ struct FrameResult {
   int n_new_visual_points = 0; ///< created this frame
   double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
   double vio_ms = 0.0;
-  bool image_wrong_size = false;  ///< the frame's image is not the calibrated camera's (never used)
+  ImageStatus image = ImageStatus::Ok;  ///< a failed image (image_check.hpp) is never used
   MapUpdateReport map;         ///< step 7 in process: slides, evictions, bytes (estimate unless recounted), ms
   MapLinkReport link;          ///< steps 2, 6, 7 through the map server
 
-  /// The LiDAR update could not run although the frame had points and a map to match (fewer than
-  /// lio.min_matches matches): the frame carries the IMU prediction.
-  bool lidarFailed() const { return lio.initialized && lio.n_points > 0 && !lio.lio_ok && !lio.map_started; }
+  /// The LiDAR update failed although a map to match existed (no returns, or fewer than
+  /// lio.min_matches matches): the frame counts as degenerate, its scan stays out of the map, and the
+  /// visual update (if the camera can) carries the estimate.
+  bool lidar_failed = false;
+  bool map_seeded = false;  ///< the LiDAR update failed with nothing around in the map: the scan seeded it
+  bool lidarFailed() const { return lidar_failed; }
 };
 
 }  // namespace livo

@@ -26,8 +26,8 @@ struct ImuConfig {
   /// init_static_factor times the RMS the configured white noise gives (sqrt(3) density sqrt(rate)
   /// noise_scale per sensor) plus the rig's vibration at rest below.
   double init_static_factor = 3.0;
-  double init_vibration_gyro_rad_s = 0.0;   ///< RMS gyro vibration of the rig at rest (rotors, engine), rad/s
-  double init_vibration_accel_mps2 = 0.0;   ///< RMS accelerometer vibration at rest, m/s^2
+  double init_vibration_gyro_rad_s = 0.0;   ///< RMS gyro vibration of the rig at rest (rotors, engine; 3 axes together), rad/s
+  double init_vibration_accel_mps2 = 0.0;   ///< RMS accelerometer vibration at rest (3 axes together), m/s^2
   double init_max_gyro_std = 0.0;   ///< rad/s: explicit static threshold replacing the derived one (0: derive)
   double init_max_accel_std = 0.0;  ///< m/s^2: explicit static threshold (0: derive)
   /// Without a static window this long after the first sample (at least one window), the odometry

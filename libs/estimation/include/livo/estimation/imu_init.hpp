@@ -15,8 +15,9 @@
 // The state is at the end of the chosen window: gyro bias = mean gyro, gravity from the mean
 // specific force (its norm also gives the accelerometer scale: g-unit IMUs), zero velocity. The
 // covariance says what was observed: the gyro bias to sigma_gyro / sqrt(n) per axis, roll and pitch
-// to sigma_accel / (g sqrt(n)); yaw and position are the world frame's definition; the accelerometer
-// bias is not observable at rest (init_accel_bias_sigma_mps2).
+// to sqrt(sigma_accel^2 / n + sigma_ba^2) / g (at rest a horizontal accelerometer bias looks like a
+// tilt); yaw and position are the world frame's definition; the accelerometer bias itself is not
+// observable at rest (its prior sigma_ba = init_accel_bias_sigma_mps2).
 #pragma once
 
 #include "livo/estimation/imu.hpp"

@@ -17,7 +17,13 @@ class InProcessMap final : public MapAccess {
 
   const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidar().voxels(); }
   void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.lidar().insert(points); }
-  VisualMapOps* visualMap(const Frame&, FrameResult&) override { return &visual_; }
+  bool holdsAround(const FrameResult& r) override {
+    const VoxelMap& m = map_.lidar().voxels();
+    for (const Vec3& p : scanInWorld(r.lio.state, r.lio.points))
+      if (keyablePoint(p, m.config().voxel_size_m) && m.hasVoxel(m.keyOf(p))) return true;
+    return false;
+  }
+  VisualMapOps* visualMap(const Frame&, FrameResult&, const std::vector<VoxelKey>*) override { return &visual_; }
   void finishFrame(const Frame&, FrameResult& r) override { r.map = map_.update(r.lio.state.p_world_imu); }
 
  private:

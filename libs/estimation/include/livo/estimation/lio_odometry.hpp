@@ -71,6 +71,8 @@ class LioOdometry {
   /// Records that the frame's points went into the map (enables update() from the next frame on).
   void markInserted(LioFrameResult& r);
 
+  /// True once a scan went into the map (update() runs from then on).
+  bool mapStarted() const { return map_started_; }
   /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
   void setState(const NavState& x, const StateCov& P) {
     x_ = x;

@@ -4,10 +4,10 @@
 //   InProcessMap (in_process_map.hpp): the HybridMap in the same process (livo-run, the tests);
 //   RemoteMap (remote_map.hpp): the map server's HybridMap behind a MapClient (livo-estimator).
 //
-// Per estimated frame the pipeline calls, in this order: planesFor (step 2), insertScan (step 3b),
-// visualMap (step 6, only when the frame's image is selected), then finishFrame (step 7) once per
-// frame after the IMU is initialised (also for a frame inside the initialisation window, which
-// skips steps 2-6).
+// Per estimated frame the pipeline calls, in this order: planesFor (step 2), insertScan (step 3b,
+// only with a registered scan: an unregistered one never goes into the map), visualMap (step 6,
+// only when the frame's image is selected), then finishFrame (step 7) once per frame after the IMU
+// is initialised (also for a frame inside the initialisation window, which skips steps 2-6).
 #pragma once
 
 #include "livo/common/types.hpp"
@@ -28,10 +28,15 @@ class MapAccess {
   virtual const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) = 0;
   /// Step 3b: the frame's points in the world frame at the LiDAR posterior, with covariance.
   virtual void insertScan(std::vector<PointWithCov> points, FrameResult& r) = 0;
+  /// Whether the map holds anything where the predicted scan is (after a failed LiDAR update: with
+  /// nothing there the scan is new territory or the map is empty, and seeds it instead of being
+  /// dropped). True when unknown (no answer from the map server).
+  virtual bool holdsAround(const FrameResult& r) = 0;
   /// Step 6: the visual map for the frame's image, around the registered scan at the LiDAR posterior
-  /// (r.lio.state); null when it cannot be had (no answer from the map server): no visual update.
+  /// (r.lio.state), or in the visual voxels `frustum_keys` when the LiDAR update failed (no
+  /// registered scan); null when it cannot be had (no answer from the map server): no visual update.
   /// Valid until finishFrame.
-  virtual VisualMapOps* visualMap(const Frame& frame, FrameResult& r) = 0;
+  virtual VisualMapOps* visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) = 0;
   /// Step 7: the frame is done (r.lio.state is final): map maintenance or the map server's update.
   virtual void finishFrame(const Frame& frame, FrameResult& r) = 0;
 };

@@ -36,7 +36,8 @@ class DualVisualMap {
   /// may still receive the long-term winner (each map applies the occlusion test to its own winner).
   std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                          const std::vector<Vec3>& scan_points_world,
-                                         std::vector<Vec2>* pixels = nullptr);
+                                         std::vector<Vec2>* pixels = nullptr,
+                                         const std::vector<VoxelKey>* voxel_keys = nullptr);
   /// Cells holding a point returned by the last pointsInView (for addPoints).
   const std::vector<bool>& occupiedCells() const { return occupied_; }
   /// Summed counters of the last pointsInView (selected = points returned).

@@ -82,11 +82,15 @@ class VisualMap {
   /// border_px border; per grid cell the qualifying point with the smallest depth z wins (ties: smaller
   /// id). A winner is occluded (dropped, its cell stays free) when a scan point projected within
   /// +-occlusion_window_px of its pixel (rounded) is closer in depth by more than occlusion_depth_m.
-  /// Results are ordered by cell index; `pixels` (optional) receives the projections. The occupied
+  /// Results are ordered by cell index; `pixels` (optional) receives the projections. With
+  /// `voxel_keys` the visual voxels searched are those keys instead of the scan's (a frame whose
+  /// LiDAR failed: the camera frustum, frustum_keys.hpp); the scan still serves the occlusion test
+  /// (an empty scan: none). The occupied
   /// cells (cells with a returned point) are kept for addPoints: see occupiedCells().
   std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                          const std::vector<Vec3>& scan_points_world,
-                                         std::vector<Vec2>* pixels = nullptr);
+                                         std::vector<Vec2>* pixels = nullptr,
+                                         const std::vector<VoxelKey>* voxel_keys = nullptr);
   /// Occupied cells of the last pointsInView call (size gridFor(cam).size()).
   const std::vector<bool>& occupiedCells() const { return occupied_; }
   const VisualRetrievalStats& lastRetrieval() const { return retrieval_; }

@@ -5,7 +5,8 @@
 // includes, the first LiDAR point time), sorted by time, offsets re-referenced to t_last; later points
 // are carried over to the next frame. The frame is emitted once the newest LiDAR point time and the
 // newest IMU time both reach t_c. A LiDAR scan end that no image follows within image_wait_timeout_s
-// becomes a frame without image (the camera stopped or is slow), so the estimator keeps running.
+// becomes a frame without image (the camera stopped or is slow), so the estimator keeps running; so
+// does a scan end whose next image comes after the next scan end (the camera skipped a period).
 // LiDAR-only mode: one frame per non-empty scan, ending at its last (kept) point time.
 //
 // Every frame carries the IMU samples covering [t_last, t_c]: from the last one at or before t_last to

@@ -24,6 +24,7 @@ enum class RngStream : std::uint64_t {
   CameraExposure = 8,
   Texture = 9,
   LidarBeam = 10,
+  ImuVibration = 11,
 };
 
 inline std::uint64_t mix64(std::uint64_t z) {

@@ -63,7 +63,21 @@ struct LidarSimConfig {
   double max_incidence_deg = 80.0;  ///< no return when the beam meets the surface more obliquely
   double points_per_second = 0.0;   ///< 0: model default (avia 240k, mid360 200k, spinning32 327680)
   double beam_divergence_mrad = 3.0;  ///< footprint for the intensity lookup
+  /// [t0, t1, t0, t1, ...] seconds from the start: no scan starts inside any [t0, t1) (a blinded or
+  /// dropped LiDAR stream).
+  std::vector<double> dropouts_s;
   void load(const ConfigNode& n);
+};
+
+/// Rotor-like vibration added to the IMU measurements only (the rig's motion is unchanged): per axis
+/// a sinusoid at freq_hz plus band-limited noise around it (four tones within +-10 % of freq_hz with
+/// seeded phases); accel_mps2 and gyro_rad_s are the RMS amplitudes per axis.
+struct VibrationConfig {
+  double accel_mps2 = 0.0;
+  double gyro_rad_s = 0.0;
+  double freq_hz = 100.0;
+  void load(const ConfigNode& n);
+  bool active() const { return accel_mps2 > 0 || gyro_rad_s > 0; }
 };
 
 struct ImuSimConfig {
@@ -74,6 +88,7 @@ struct ImuSimConfig {
   double accel_bias_walk = 3.0e-3;  ///< m/s^3/sqrt(Hz)
   Eigen::Vector3d gyro_bias_init{0.0, 0.0, 0.0};   ///< rad/s
   Eigen::Vector3d accel_bias_init{0.0, 0.0, 0.0};  ///< m/s^2
+  VibrationConfig vibration;       ///< imu.vibration {accel_mps2, gyro_rad_s, freq_hz}
   void load(const ConfigNode& n);
 };
 
@@ -89,6 +104,7 @@ struct CameraSimConfig {
   double phase_s = 0.037;       ///< first image time after the start (independent of LiDAR scans)
   double exposure_jitter = 0.1;  ///< sigma of log(gain), per frame
   double pixel_noise = 2.0;      ///< Gaussian sigma, gray levels
+  std::vector<double> dropouts_s;  ///< [t0, t1, ...] seconds from the start: no image inside any [t0, t1)
   void load(const ConfigNode& n);
 };
 
@@ -118,6 +134,8 @@ struct SimScenario {
   /// Throws ConfigError on inconsistent values (naming the key).
   void validate() const;
   Utime startUtime() const { return fromSeconds(start_time_s); }
+  /// Whether `t_rel` (seconds from the start) falls in one of the [t0, t1) intervals.
+  static bool inDropout(const std::vector<double>& intervals, double t_rel);
   std::string environmentOrDefault() const;
 };
 

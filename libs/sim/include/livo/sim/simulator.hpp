@@ -113,6 +113,7 @@ class Simulator {
   void writeRigConfig(std::ostream& out) const;
 
  private:
+  void addVibration(double t_rel, ImuSample& s) const;
   void imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth);
   /// Rays [first, last) of scan j (which starts t0 s after the start): returns into `points`, the
   /// rays without one counted in `st`.
