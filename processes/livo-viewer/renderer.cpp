@@ -6,6 +6,7 @@
 
 #include <vtkActor.h>
 #include <vtkActor2D.h>
+#include <vtkCallbackCommand.h>
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
 #include <vtkImageData.h>
@@ -122,6 +123,8 @@ struct Renderer::Impl {
   vtkSmartPointer<vtkImageMapper> image_mapper = vtkSmartPointer<vtkImageMapper>::New();
   vtkSmartPointer<vtkActor2D> image_actor = vtkSmartPointer<vtkActor2D>::New();
   bool have_map = false, have_scan = false, image_shown = false;
+  bool closed = false;  ///< 'q', 'e' or the window closed
+  vtkSmartPointer<vtkCallbackCommand> on_exit = vtkSmartPointer<vtkCallbackCommand>::New();
   std::mutex keys_mutex;
   std::vector<char> keys;
 
@@ -163,6 +166,13 @@ Renderer::Renderer(const RendererOptions& opt) : impl_(std::make_unique<Impl>())
   m.image_mapper->SetColorWindow(255.0);
   m.image_mapper->SetColorLevel(127.5);
   m.image_actor->SetMapper(m.image_mapper);
+  // Quitting ('q', 'e', the window's close button) ends in the interactor's ExitEvent. PCL's observer of
+  // it calls TerminateApp(), which crashes in Xlib when the interactor's loop is not running (we never
+  // run it): ours comes first, notes the request and stops the event there.
+  m.on_exit->SetClientData(&m.closed);
+  m.on_exit->SetCallback([](vtkObject*, unsigned long, void* closed, void*) { *static_cast<bool*>(closed) = true; });
+  m.on_exit->SetAbortFlagOnExecute(1);
+  m.viz->getRenderWindow()->GetInteractor()->AddObserver(vtkCommand::ExitEvent, m.on_exit, 1.0f);
   m.viz->registerKeyboardCallback([this](const pcl::visualization::KeyboardEvent& e) {
     if (!e.keyDown()) return;
     std::lock_guard<std::mutex> lock(impl_->keys_mutex);
@@ -235,7 +245,7 @@ void Renderer::setCamera(const livo::viewer::ViewCamera& c) {
 }
 
 bool Renderer::spinOnce(int ms) {
-  if (impl_->viz->wasStopped()) return false;
+  if (impl_->closed || impl_->viz->wasStopped()) return false;
   impl_->ren->ResetCameraClippingRange();
   // Render, then handle the pending window events without waiting. Not PCLVisualizer::spinOnce():
   // with VTK 9.1 its ProcessEvents() waits in select() for the next X event or up to a second when no
@@ -246,7 +256,7 @@ bool Renderer::spinOnce(int ms) {
   vtkRenderWindowInteractor* interactor = win->GetInteractor();
   for (int n = 0; display && interactor && XPending(display) > 0 && n < 1000; ++n) interactor->ProcessEvents();
   std::this_thread::sleep_for(std::chrono::milliseconds(ms));
-  return !impl_->viz->wasStopped();
+  return !impl_->closed && !impl_->viz->wasStopped();
 }
 
 std::vector<char> Renderer::takeKeys() {
