@@ -1,6 +1,6 @@
-// An X server for the tests that open windows (livo-viewer, lcm-spy): Xvfb started in the test's
-// network namespace (X clients there may reach it through its abstract socket too) on a display number
-// it picks itself (-displayfd), so that tests running in parallel never collide.
+// An X server for the tests that open windows (livo-viewer, lcm-spy): Xvfb, in the test's network
+// namespace when it has one (X clients there may reach it through its abstract socket too), on a
+// display number it picks itself (-displayfd), so that tests running in parallel never collide.
 #pragma once
 
 #include "process_test_children.hpp"
@@ -18,16 +18,18 @@ struct XServer {
   std::string display;  ///< ":N"
   std::unique_ptr<Child> child;
 
-  /// Starts Xvfb (screen `width` x `height` x 24) in `ns`, its log and display number under `dir`.
-  XServer(const Netns& ns, const std::string& dir, int width = 1280, int height = 1024) {
+  /// Starts Xvfb (screen `width` x `height` x 24) in `ns` (nullptr: here), its log and display number
+  /// under `dir`.
+  XServer(const Netns* ns, const std::string& dir, int width = 1280, int height = 1024) {
     if (!haveTool("Xvfb")) {
       why = "Xvfb missing (Debian package xvfb, installed by scripts/setup)";
       return;
     }
     const std::string number = dir + "/xvfb_display.txt", log = dir + "/xvfb.txt";
     const std::string screen = std::to_string(width) + "x" + std::to_string(height) + "x24";
-    child = std::make_unique<Child>(
-        ns.exec({"sh", "-c", "exec Xvfb -displayfd 3 -screen 0 " + screen + " -nolisten tcp 3>'" + number + "'"}), log);
+    const std::vector<std::string> argv = {"sh", "-c",
+                                           "exec Xvfb -displayfd 3 -screen 0 " + screen + " -nolisten tcp 3>'" + number + "'"};
+    child = std::make_unique<Child>(ns ? ns->exec(argv) : argv, log);
     // Xvfb writes the display number and a newline once it accepts connections.
     const bool up = waitUntil([&] { return readFile(number).find('\n') != std::string::npos; }, 30);
     const std::string n = readFile(number);

@@ -65,7 +65,7 @@ TEST(SpyNetns, ListsEveryChannelOfAFourProcessRun) {
   for (const char* jar : {"/livo_lcmtypes.jar", "/livo_spy.jar"})
     if (!std::filesystem::exists(std::string(LIVO_BINARY_DIR) + jar)) LIVO_SKIP() << jar << " not built (no JDK)";
   const std::string dir = tempDir("spy");
-  XServer x(ns, dir);
+  XServer x(&ns, dir);
   if (!x.ok) LIVO_SKIP() << x.why;
   const SimulatedDemo demo(dir, 6.0);
   ASSERT_TRUE(demo.ok) << demo.error;

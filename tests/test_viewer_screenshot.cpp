@@ -70,7 +70,7 @@ TEST(ViewerScreenshot, TrajectoryPixelsLieOnTheProjectedGroundTruth) {
   if (!haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing (Debian package liblcm-bin)";
   ASSERT_TRUE(std::filesystem::exists(kBin + "/livo-viewer")) << "livo-viewer not built (PCL visualisation missing?)";
   const std::string dir = tempDir("viewer_screenshot");
-  XServer x(ns, dir);
+  XServer x(&ns, dir);
   if (!x.ok) LIVO_SKIP() << x.why;
   const SimulatedDemo demo(dir, kLogS);
   ASSERT_TRUE(demo.ok) << demo.error;

@@ -138,6 +138,7 @@ int run(const Args& a, const livo::sim::SimScenario& sc) {
     writeEvent(ev, log, gt, n);
     progress.update(sim.relTime(ev.utime) / duration, static_cast<double>(log.eventsWritten()));
   }
+  progress.update(1.0, static_cast<double>(log.eventsWritten()));  // the last event comes before duration_s
   progress.finish();
   log.flush();
   if (std::fclose(gt) != 0) throw std::runtime_error(a.gt + ": write failed");
