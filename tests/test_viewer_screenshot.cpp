@@ -1,9 +1,10 @@
 // livo-viewer watching the four processes: the demo log (10 s of it) replayed by lcm-logplayer into
 // livo-preprocess, livo-estimator, livo-mapserver and livo-exporter in a private network namespace, the
-// viewer attached under Xvfb in the same namespace, `--view top --screenshot-at 8 shot.png`. The picture
-// is not blank, and the trajectory's pixels (its exact colour: lighting is off) lie on the ground-truth
-// path projected with the camera matrix the viewer wrote next to the picture (after the SE(3) alignment
-// of the ground truth to the exported estimate): p95 distance and coverage within a few pixels.
+// viewer attached under Xvfb in the same namespace, `--view top --camera --screenshot-at 8 shot.png` (the
+// README's picture is this one, camera inset included). The picture is not blank, and the trajectory's
+// pixels (its exact colour: lighting is off) lie on the ground-truth path projected with the camera
+// matrix the viewer wrote next to the picture (after the SE(3) alignment of the ground truth to the
+// exported estimate): p95 distance and coverage within a few pixels.
 // Skipped without root (namespace), Xvfb or lcm-logplayer, which CI provides (CI=true: a skip fails).
 // livo-test-bins: livo-sim livo-preprocess livo-estimator livo-mapserver livo-exporter livo-viewer
 // livo-test-deps: livo_eval opencv_core opencv_imgcodecs
