@@ -8,11 +8,14 @@ LIVO_JOBS="${LIVO_JOBS:-2}"
 # Debian bookworm packages the suite needs to build, test and inspect (lcm.pc needs libglib2.0-dev).
 # librosbag-storage-dev: `livo-convert rosbag` (optional at build time); libsensor-msgs-dev: its tests.
 # clang + libclang-rt-14-dev: the libFuzzer runs of tests/fuzz (ctest, scripts/fuzz).
+# libpcl-dev brings PCL's visualisation module (VTK) for livo-viewer; xvfb: an X server without a screen
+# for the tests that open windows (xauth: for xvfb-run; libgl1-mesa-dri: Mesa's software OpenGL, which
+# VTK renders with under Xvfb); default-jre: AWT for lcm-spy's window (the headless JDK has none).
 LIVO_PACKAGES=(
   build-essential cmake pkg-config ccache git
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libyaml-cpp-dev libgtest-dev
-  default-jdk-headless libjchart2d-java
+  default-jdk-headless default-jre libjchart2d-java xvfb xauth libgl1-mesa-dri
   librosbag-storage-dev libsensor-msgs-dev
   iproute2 python3 python3-matplotlib
   clang libclang-rt-14-dev

@@ -12,6 +12,7 @@ void addCommonOptions(livo::CommandLine& cl, CommonArgs& a, const std::string& i
           "output log (overwritten; removed again if the conversion fails, except a bag conversion stopped by a "
           "corrupt chunk, which keeps the events before it)")
       .required();
+  livo::addProgressOption(cl, &a.progress);
   cl.flag("--quiet", &a.quiet, "no progress line on stderr");
 }
 
@@ -44,14 +45,15 @@ void addRosbagOptions(livo::CommandLine& cl, livo::RosbagOptions& opt) {
   cl.text("--lidar-channel", &opt.lidar_channel, "CH", "output channel of the scans");
 }
 
-int runRosbag(const std::string& bag, const std::string& out, livo::RosbagOptions opt, bool quiet) {
+int runRosbag(const std::string& bag, const std::string& out, livo::RosbagOptions opt, livo::ProgressMode progress) {
   if (!livo::rosbagSupported()) {
     std::cerr << "livo-convert: error: this livo-convert was built without ROS bag support (librosbag-storage-dev "
                  "was not found, or LIVO_WITH_ROSBAG was OFF, when the build was configured); install it (scripts/setup does) and rebuild\n";
     return livo::kExitRunError;
   }
-  opt.progress = Progress(quiet, "messages");
+  opt.progress = progressLine(progress, "messages");
   const livo::RosbagSummary s = livo::convertRosbag(bag, out, opt);
+  opt.progress = nullptr;  // ends the progress line before the summary and errors
   std::cout << "livo-convert rosbag: " << s.describe();
   if (!s.error.empty()) {
     std::cerr << "livo-convert: error: " << s.error << "\n"
