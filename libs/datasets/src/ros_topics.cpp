@@ -84,9 +84,9 @@ RosTopicChoice chooseRosTopic(const std::vector<BagTopicInfo>& topics, RosRole r
     c.type = rosTypeOf(it->datatype);
     if (!roleTakes(role, c.type)) {
       c.kind = Kind::kWrongType;
-      c.problem = source + ": topic " + wanted + " has type " + it->datatype + ", which is not a " + roleName(role) +
-                  " type this converter reads (" + roleTypeNames(role) + "; supported types: " + rosSupportedTypes() +
-                  ")";
+      c.problem = source + ": topic " + wanted + " has type " + it->datatype + ", which is not " +
+                  (role == RosRole::Imu ? "an " : "a ") + roleName(role) + " type livo reads (" + roleTypeNames(role) +
+                  "; supported types: " + rosSupportedTypes() + ")";
       return c;
     }
     c.kind = Kind::kChosen;
