@@ -64,10 +64,15 @@ bool SensorInput::subscribe(ros::NodeHandle& nh, const std::string& topic, const
 }
 
 void SensorInput::unsubscribe() {
-  std::lock_guard<std::mutex> lock(mu_);
-  sub_.shutdown();
-  sub_ = ros::Subscriber();
-  topic_.clear();
+  ros::Subscriber old;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    old = sub_;
+    sub_ = ros::Subscriber();
+    topic_.clear();
+  }
+  // Outside mu_: shutdown() waits for a callback in progress, which may be waiting for mu_.
+  old.shutdown();
 }
 
 std::string SensorInput::topic() const {
