@@ -249,3 +249,34 @@ TEST(CommandLine, SubCommandsHaveTheirOwnOptionsAndHelp) {
   EXPECT_EQ(testing::internal::GetCapturedStderr(),
             "livo-conv: --rate-hz: expected a number > 0, got 'fast'\ntry 'livo-conv kitti --help'\n");
 }
+
+TEST(CommandLine, AnOptionWithASecondWordTakesBoth) {
+  double at_s = 0.0;
+  std::string file;
+  CommandLine cl("livo-demo", "Two words.");
+  cl.number("--screenshot-at", &at_s, "S", "when", 0.0).unit("s").andText("FILE", &file);
+  const auto parse = [&](std::vector<const char*> argv) {
+    argv.insert(argv.begin(), "livo-demo");
+    std::ostringstream out;
+    return cl.parse(static_cast<int>(argv.size()), argv.data(), out);
+  };
+  EXPECT_EQ(parse({"--screenshot-at", "12.5", "out.png"}), CommandLine::Outcome::kRun);
+  EXPECT_DOUBLE_EQ(at_s, 12.5);
+  EXPECT_EQ(file, "out.png");
+  parse({"--screenshot-at=3", "b.png"});
+  EXPECT_DOUBLE_EQ(at_s, 3.0);
+  EXPECT_EQ(file, "b.png");
+  const auto error = [&](std::vector<const char*> argv) -> std::string {
+    try {
+      parse(std::move(argv));
+    } catch (const UsageError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error({"--screenshot-at", "5"}), "--screenshot-at: missing value (FILE) after '5'");
+  EXPECT_EQ(error({"--screenshot-at", "soon", "a.png"}), "--screenshot-at: expected a number >= 0, got 'soon'");
+  EXPECT_NE(cl.help().find("--screenshot-at S FILE"), std::string::npos) << cl.help();
+  bool flag = false;
+  EXPECT_THROW(cl.flag("--flag", &flag, "f").andText("X", &file), std::logic_error);
+}

@@ -1,12 +1,18 @@
 // livo-report (scripts/livo-report, copied to build/bin): from a run directory with a known error
 // against ground truth it writes the four plots and a summary whose ATE equals the oracle's; bad input
-// gets a clear error. Skipped when Debian's python3-matplotlib is missing.
-// livo-test-deps: livo_eval
+// gets a clear error; the map pictures of a synthetic room show what a top view must (the ceiling cut
+// away, the table over the floor in the area ratio of the scene) from map.pcd written by PCL in each of
+// its three encodings. Skipped when Debian's python3-matplotlib is missing.
+// livo-test-deps: livo_eval livo_process opencv_core opencv_imgcodecs
 // livo-test-bins: livo-report
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/tum.hpp"
 
 #include "test_skip.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
 
 #include <gtest/gtest.h>
 
@@ -14,6 +20,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <random>
 #include <sstream>
 #include <string>
@@ -108,5 +115,97 @@ TEST(LivoReport, PlotsAndSummaryOfARunWithAKnownError) {
   std::ofstream(dir / "bad.tum") << "1 2 3\n";
   EXPECT_EQ(run(kReport + " " + (dir / "run").string() + " --gt " + (dir / "bad.tum").string(), out, dir.string()), 2);
   EXPECT_NE(out.find("bad.tum:1: expected 8 columns"), std::string::npos) << out;
+  fs::remove_all(dir);
+}
+
+namespace {
+
+/// Pixels of `img` (BGR) within 3 of the colour (r, g, b) in every channel.
+std::size_t countColour(const cv::Mat& img, int r, int g, int b) {
+  std::size_t n = 0;
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+      n += std::abs(p[2] - r) <= 3 && std::abs(p[1] - g) <= 3 && std::abs(p[0] - b) <= 3;
+    }
+  return n;
+}
+
+}  // namespace
+
+TEST(LivoReport, MapPicturesShowTheRoomFromAboveWithoutItsCeiling) {
+  if (!haveMatplotlib()) LIVO_SKIP() << "python3-matplotlib missing";
+  const fs::path dir = fs::temp_directory_path() / ("livo_report_map_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "run");
+  // A 4 m x 3 m room sampled every 5 cm: the floor (z = 0), a 1 m x 1 m table top at 0.7 m, a ceiling at
+  // 2.5 m, each in a colour of its own ("camera" colours); a circle of poses at 1 m height.
+  const double step = 0.05;
+  pcl::PointCloud<pcl::PointXYZRGB> cloud;
+  const auto add = [&](double x, double y, double z, int r, int g, int b) {
+    pcl::PointXYZRGB p;
+    p.x = float(x);
+    p.y = float(y);
+    p.z = float(z);
+    p.r = std::uint8_t(r);
+    p.g = std::uint8_t(g);
+    p.b = std::uint8_t(b);
+    cloud.push_back(p);
+  };
+  for (double x = step / 2; x < 4.0; x += step)
+    for (double y = step / 2; y < 3.0; y += step) {
+      add(x, y, 0.0, 180, 60, 20);
+      add(x, y, 2.5, 60, 20, 180);
+      if (x > 2.8 && x < 3.8 && y > 0.2 && y < 1.2) add(x, y, 0.7, 20, 180, 60);
+    }
+  cloud.width = std::uint32_t(cloud.size());
+  cloud.height = 1;
+  {
+    std::ofstream tum(dir / "run" / "trajectory.tum"), csv(dir / "run" / "frames.csv");
+    csv << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes\n";
+    for (int i = 0; i < 100; ++i) {
+      const double a = 2 * M_PI * i / 100, t = 10.0 + 0.1 * i;
+      Pose T = Pose::Identity();
+      T.translation() = Vec3(1.6 + 0.6 * std::cos(a), 1.6 + 0.6 * std::sin(a), 1.0);
+      writeTum(tum, {t, T});
+      csv << t << ",5,1,6,0.3,0,1,1000,900,40,1000000\n";
+    }
+  }
+  std::ofstream(dir / "run" / "stats.json") << R"({"frames": 100, "visual_frames": 100, "map": {"bytes": 1000000}})";
+
+  std::vector<std::size_t> floors;
+  for (const std::string encoding : {"binary", "binary_compressed", "ascii"}) {
+    const std::string pcd = (dir / "run" / "map.pcd").string();
+    const int rc = encoding == "binary"              ? pcl::io::savePCDFileBinary(pcd, cloud)
+                   : encoding == "binary_compressed" ? pcl::io::savePCDFileBinaryCompressed(pcd, cloud)
+                                                     : pcl::io::savePCDFileASCII(pcd, cloud);
+    ASSERT_EQ(rc, 0) << encoding;
+    std::string out;
+    ASSERT_EQ(run(kReport + " " + (dir / "run").string(), out, dir.string()), 0) << encoding << "\n" << out;
+    for (const char* png : {"map_top.png", "map_oblique.png"})
+      ASSERT_TRUE(fs::exists(dir / "run" / "report" / png)) << encoding << " " << png;
+    const std::string md = slurp((dir / "run" / "report" / "README.md").string());
+    EXPECT_NE(md.find("![map, top](map_top.png)"), std::string::npos) << md;
+    EXPECT_NE(md.find("![map, oblique](map_oblique.png)"), std::string::npos) << md;
+    // The camera-coloured top view (exact colours: no shading from above): no ceiling (cut at the highest
+    // pose + 1 m), the table's top hides the floor below it: table / (table + floor) is the table's share
+    // of the room, 1 / 12, up to the pixels at the edges and under the trajectory's line.
+    const cv::Mat top = cv::imread((dir / "run" / "report" / "map_top.png").string(), cv::IMREAD_COLOR);
+    ASSERT_FALSE(top.empty());
+    const std::size_t floor = countColour(top, 180, 60, 20), table = countColour(top, 20, 180, 60),
+                      ceiling = countColour(top, 60, 20, 180);
+    std::cout << encoding << ": top view pixels: floor " << floor << ", table " << table << ", ceiling " << ceiling << "\n";
+    EXPECT_EQ(ceiling, 0u) << encoding;
+    EXPECT_GT(floor, 50000u) << encoding;
+    EXPECT_NEAR(double(table) / double(table + floor), 1.0 / 12.0, 0.015) << encoding;
+    floors.push_back(floor);
+  }
+  EXPECT_EQ(floors[0], floors[1]) << "binary and binary_compressed give the same picture";
+  EXPECT_EQ(floors[0], floors[2]) << "binary and ascii give the same picture";
+
+  // A damaged map.pcd: a clear error naming the file, exit code 2.
+  std::ofstream(dir / "run" / "map.pcd") << "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000\nHEIGHT 1\nPOINTS 1000\nDATA binary\n";
+  std::string out;
+  EXPECT_EQ(run(kReport + " " + (dir / "run").string(), out, dir.string()), 2);
+  EXPECT_NE(out.find("map.pcd: truncated"), std::string::npos) << out;
   fs::remove_all(dir);
 }

@@ -18,7 +18,7 @@ namespace {
 
 using livo::CommandLine;
 using livo_convert::CommonArgs;
-using livo_convert::Progress;
+using livo_convert::progressLine;
 
 /// The euroc command's values beyond livo::EurocOptions (window limits are optional there).
 struct EurocArgs {
@@ -63,8 +63,9 @@ void addKittiOptions(CommandLine& cl, livo::KittiOptions& opt, bool& no_times) {
 int runEuroc(const CommandLine& cl, const CommonArgs& c, livo::EurocOptions opt, const EurocArgs& a) {
   if (cl.given("--start")) opt.start_s = a.start_s;
   if (cl.given("--end")) opt.end_s = a.end_s;
-  opt.progress = Progress(c.quiet, "images");
+  opt.progress = progressLine(c.progressMode(), "images");
   const livo::ConversionSummary summary = livo::convertEuroc(c.in, c.out, opt);
+  opt.progress = nullptr;  // ends the progress line
   if (!a.rig.empty()) {
     const std::string mav = livo::eurocMavDir(c.in, opt);
     const std::string text = livo::eurocRigYaml(livo::readEurocCalibration(mav, opt), mav);
@@ -78,8 +79,10 @@ int runEuroc(const CommandLine& cl, const CommonArgs& c, livo::EurocOptions opt,
 
 int runKitti(const CommonArgs& c, livo::KittiOptions opt, bool no_times) {
   if (no_times) opt.use_times = false;
-  opt.progress = Progress(c.quiet, "scans");
-  std::cout << "livo-convert kitti: " << livo::convertKitti(c.in, c.out, opt).describe();
+  opt.progress = progressLine(c.progressMode(), "scans");
+  const livo::ConversionSummary summary = livo::convertKitti(c.in, c.out, opt);
+  opt.progress = nullptr;  // ends the progress line
+  std::cout << "livo-convert kitti: " << summary.describe();
   return livo::kExitOk;
 }
 
@@ -107,7 +110,7 @@ int main(int argc, char** argv) {
   try {
     if (cl.commandName() == "euroc") return runEuroc(euroc_cl, common, euroc, euroc_args);
     if (cl.commandName() == "kitti") return runKitti(common, kitti, no_times);
-    return livo_convert::runRosbag(common.in, common.out, bag, common.quiet);
+    return livo_convert::runRosbag(common.in, common.out, bag, common.progressMode());
   } catch (const std::exception& e) {
     std::cerr << "livo-convert: error: " << e.what() << "\n";
     return livo::kExitRunError;

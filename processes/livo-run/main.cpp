@@ -1,5 +1,5 @@
 // livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off] [--map-mode hybrid|global]
-//          [--max-frames N] [--no-maps] [--quiet] [--print-config]
+//          [--max-frames N] [--no-maps] [--progress] [--quiet] [--print-config]
 //
 // Runs the whole pipeline in one process (no network) on an LCM log, as fast as possible:
 // log events -> validated structs -> frame builder (recut sweeps + IMU + image) -> odometry -> outputs.
@@ -9,6 +9,7 @@
 #include "run_log.hpp"
 
 #include "livo/cli/command_line.hpp"
+#include "livo/cli/progress.hpp"
 #include "livo/common/config.hpp"
 #include "livo/process/cli.hpp"
 #include "livo/process/estimator_node.hpp"
@@ -34,6 +35,7 @@ void addOptions(CommandLine& cl, livo_run::Args& a) {
   cl.flag("--no-maps", &a.no_maps,
           "skip map.pcd / map.bt (their point store and ray casting cost time and memory of their own: "
           "benchmarks of the odometry use --no-maps)");
+  addProgressOption(cl, &a.progress);
   cl.flag("--quiet", &a.quiet, "no progress line and no preprocessing summary");
   cl.flag("--print-config", &a.print_config, kPrintConfigHelp);
 }

@@ -1,6 +1,7 @@
 #include "run_log.hpp"
 
 #include "livo/cli/command_line.hpp"
+#include "livo/cli/progress.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/image_convert.hpp"
@@ -59,16 +60,17 @@ class MapBytes {
 /// initialisation message, the --max-frames stop.
 class FrameSink {
  public:
-  FrameSink(const Args& args, const Config& cfg, const Pipeline& pipeline, RunOutputs& outputs, Counters& counters)
+  FrameSink(const Args& args, const Config& cfg, const Pipeline& pipeline, RunOutputs& outputs, Counters& counters,
+            ProgressLine& progress)
       : cloud(cfg.exporter), occupancy(cfg.exporter), args_(args), cfg_(cfg), pipeline_(pipeline),
-        outputs_(outputs), counters_(counters), map_bytes_(pipeline) {}
+        outputs_(outputs), counters_(counters), progress_(progress), map_bytes_(pipeline) {}
 
   void operator()(const Frame& frame, const FrameResult& r) {
     if (stop_) return;
     if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
     outputs_.addFrame(record(frame, r));
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
-      std::cerr << "livo-run: " << pipeline_.odometry().initMessage() << "\n";
+      progress_.message("livo-run: " + pipeline_.odometry().initMessage());
       announced_init_ = true;
     }
     if (r.lidarFailed()) counters_["lio_failed_frames"] += 1;
@@ -112,6 +114,7 @@ class FrameSink {
   const Pipeline& pipeline_;
   RunOutputs& outputs_;
   Counters& counters_;
+  ProgressLine& progress_;
   MapBytes map_bytes_;
   bool stop_ = false;
   bool announced_init_ = false;
@@ -119,7 +122,8 @@ class FrameSink {
 
 /// Decodes and validates one log event of a sensor channel and feeds it to the pipeline. False when it
 /// was not fed: another channel, the camera disabled, or a rejected message (counted).
-bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counters& counters, bool quiet) {
+bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counters& counters, bool quiet,
+               ProgressLine& progress) {
   const MessageLimits limits{};
   if (ev.channel == cfg.channels.imu) {
     livo::imu_t m;
@@ -139,7 +143,7 @@ bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counte
     if (v) v = fromMsg(m, s, limits, &nonfinite);
     if (!v) {
       counters["rejected_scans"] += 1;
-      if (!quiet) std::cerr << "livo-run: dropped a scan: " << v.error << "\n";
+      if (!quiet) progress.message("livo-run: dropped a scan: " + v.error);
       return false;
     }
     counters["nonfinite_points"] += double(nonfinite);
@@ -154,7 +158,7 @@ bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counte
     if (v && !toGray8(img, gray, &err)) v = Validation::fail(err);
     if (!v) {
       counters["rejected_images"] += 1;
-      if (!quiet) std::cerr << "livo-run: dropped an image: " << v.error << "\n";
+      if (!quiet) progress.message("livo-run: dropped an image: " + v.error);
       return false;
     }
     pipeline.addImage(gray);
@@ -164,27 +168,21 @@ bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counte
   return true;
 }
 
-/// Step 2, the replay: every event fed, every complete frame run, a progress line twice a second.
+/// Step 2, the replay: every event fed, every complete frame run, the progress line (share of the log's
+/// bytes read, frames and their rate, time left).
 /// Returns the log error that stopped it ("" at the end of the log or at --max-frames).
 std::string replay(const Args& args, const Config& cfg, LogReader& reader, Pipeline& pipeline, FrameSink& sink,
-                   const RunOutputs& outputs, Counters& counters) {
+                   const RunOutputs& outputs, Counters& counters, ProgressLine& progress) {
   const auto runFrames = [&]() { pipeline.processReady([&](const Frame& f, const FrameResult& r) { sink(f, r); }); };
-  Stopwatch wall;
-  double last_progress = -1.0;
+  const double log_bytes = double(std::max<std::uint64_t>(1, reader.fileSize()));
   std::string log_error;
   LogEvent ev;
   try {
     while (reader.next(ev)) {
-      if (!feedEvent(ev, cfg, pipeline, counters, args.quiet)) continue;
+      if (!feedEvent(ev, cfg, pipeline, counters, args.quiet, progress)) continue;
       runFrames();
       if (sink.stopped()) break;
-      const double secs = wall.elapsedMs() / 1000.0;
-      if (!args.quiet && secs - last_progress > 0.5) {
-        last_progress = secs;
-        std::fprintf(stderr, "\rlivo-run: %5.1f%% of log, %zu frames, %.1f frames/s   ",
-                     100.0 * double(reader.position()) / double(std::max<std::uint64_t>(1, reader.fileSize())),
-                     outputs.frames(), double(outputs.frames()) / std::max(1e-3, secs));
-      }
+      progress.update(double(reader.position()) / log_bytes, double(outputs.frames()));
     }
     if (!sink.stopped()) {
       pipeline.flush();
@@ -193,7 +191,7 @@ std::string replay(const Args& args, const Config& cfg, LogReader& reader, Pipel
   } catch (const LogError& e) {
     log_error = e.what();  // keep everything processed so far; reported by the caller
   }
-  if (!args.quiet) std::fprintf(stderr, "\n");
+  progress.finish();
   return log_error;
 }
 
@@ -264,8 +262,9 @@ int runLog(const Args& args, const Config& cfg) {
   RunOutputs outputs(args.out);
   Pipeline pipeline(cfg.pipe);
   Counters counters;
-  FrameSink sink(args, cfg, pipeline, outputs, counters);
-  const std::string log_error = replay(args, cfg, reader, pipeline, sink, outputs, counters);
+  ProgressLine progress("livo-run", "frames", progressMode(args.progress, args.quiet));
+  FrameSink sink(args, cfg, pipeline, outputs, counters, progress);
+  const std::string log_error = replay(args, cfg, reader, pipeline, sink, outputs, counters, progress);
   return writeOutputs(args, cfg, pipeline, sink, outputs, counters, log_error);
 }
 

@@ -17,6 +17,7 @@ struct Args {
   std::string visual_mode = "adaptive";
   std::string map_mode = "hybrid";
   bool quiet = false;
+  bool progress = false;  ///< the progress line also when stderr is not a terminal
   bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)
   std::int64_t max_frames = -1;
   bool print_config = false;

@@ -1,8 +1,9 @@
 // livo-sim --scenario config/sim/NAME.yaml --out LOG.lcm --gt GT.tum [--rig RIG.yaml] [--seed N]
-//          [--duration S] [--threads N] [--quiet]
+//          [--duration S] [--threads N] [--progress] [--quiet]
 // Runs a simulator scenario (libs/sim) and writes an LCM log (LIVO_IMU, LIVO_LIDAR, LIVO_CAMERA in time
 // order, log timestamps = sensor times), the ground-truth IMU trajectory (TUM) and a rig config.
 #include "livo/cli/command_line.hpp"
+#include "livo/cli/progress.hpp"
 #include "livo/common/config.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/io/convert.hpp"
@@ -28,7 +29,7 @@ const char* kDescription =
 
 struct Args {
   std::string scenario, out, gt, rig;
-  bool quiet = false;
+  bool quiet = false, progress = false;
   std::int64_t seed = 0;
   double duration = 0.0;
   int threads = 2;
@@ -45,7 +46,8 @@ void addOptions(livo::CommandLine& cl, Args& a) {
       .defaultText("the scenario's duration_s");
   cl.integer("--threads", &a.threads, "N", "threads for camera rendering and LiDAR (the output does not depend on it)",
              1, 16);
-  cl.flag("--quiet", &a.quiet, "no progress line on stderr");
+  livo::addProgressOption(cl, &a.progress);
+  cl.flag("--quiet", &a.quiet, "no progress line and no summary on stderr");
 }
 
 // "t x y z qx qy qz qw" with t printed exactly from the microsecond stamp.
@@ -93,7 +95,7 @@ void writeEvent(const livo::sim::SimEvent& ev, livo::LogWriter& log, std::FILE* 
 void printSummary(const livo::sim::Simulator& sim, double duration, double wall_s, const Written& n) {
   const auto& st = sim.lidarStats();
   std::fprintf(stderr,
-               "\rlivo-sim: %.1f s simulated in %.1f s wall: %llu IMU, %llu scans (%.0f points/scan; no return %.1f%%, "
+               "livo-sim: %.1f s simulated in %.1f s wall: %llu IMU, %llu scans (%.0f points/scan; no return %.1f%%, "
                "blind %.1f%%, grazing %.1f%%), %llu images, %.1f MB of messages\n",
                duration, wall_s, static_cast<unsigned long long>(n.imu), static_cast<unsigned long long>(n.scans),
                n.scans ? static_cast<double>(n.points) / n.scans : 0.0, st.rays ? 100.0 * st.no_return / st.rays : 0.0,
@@ -130,19 +132,14 @@ int run(const Args& a, const livo::sim::SimScenario& sc) {
 
   livo::sim::SimEvent ev;
   Written n;
-  double last_print = -1.0;
   const double duration = sc.duration_s;
+  livo::ProgressLine progress("livo-sim", "messages", livo::progressMode(a.progress, a.quiet));
   while (sim.next(ev)) {
     writeEvent(ev, log, gt, n);
-    const double elapsed = wall.elapsedMs() * 1e-3;
-    if (!a.quiet && elapsed - last_print >= 0.5) {
-      last_print = elapsed;
-      const double sim_t = sim.relTime(ev.utime);
-      std::fprintf(stderr, "\rlivo-sim: %7.1f / %.1f s simulated (%3.0f%%), %6.0f events/s, %.1f MB   ", sim_t, duration,
-                   100.0 * sim_t / duration, static_cast<double>(log.eventsWritten()) / std::max(elapsed, 1e-9),
-                   static_cast<double>(n.bytes) / 1e6);
-    }
+    progress.update(sim.relTime(ev.utime) / duration, static_cast<double>(log.eventsWritten()));
   }
+  progress.update(1.0, static_cast<double>(log.eventsWritten()));  // the last event comes before duration_s
+  progress.finish();
   log.flush();
   if (std::fclose(gt) != 0) throw std::runtime_error(a.gt + ": write failed");
   if (!a.quiet) printSummary(sim, duration, wall.elapsedMs() * 1e-3, n);

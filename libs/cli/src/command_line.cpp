@@ -78,6 +78,13 @@ Option& Option::defaultText(std::string text) {
   custom_default = true;
   return *this;
 }
+Option& Option::andText(std::string metavar, std::string* dst) {
+  if (kind == Kind::kFlag || kind == Kind::kPositional)
+    throw std::logic_error(name + ": andText() needs an option with a value");
+  second_metavar = std::move(metavar);
+  set_second = [dst](const std::string& v) { *dst = v; };
+  return *this;
+}
 
 // ---------------------------------------------------------------- registration
 
@@ -293,6 +300,10 @@ std::size_t CommandLine::parseOption(const std::vector<std::string>& args, std::
       value = args[++i];
     }
     setValue(*o, value);
+    if (o->set_second) {
+      if (i + 1 >= args.size()) throw UsageError(name + ": missing value (" + o->second_metavar + ") after '" + value + "'");
+      o->set_second(args[++i]);
+    }
   }
   o->seen = true;
   return i;
@@ -396,8 +407,9 @@ std::string CommandLine::usageLine() const {
   }
   for (const auto& o : options_) {
     if (o->kind == Option::Kind::kPositional) continue;
-    if (o->is_required && o->required_unless.empty()) s += " " + o->name + " " + o->metavar;
-    else if (o->is_required) s += " [" + o->name + " " + o->metavar + "]";
+    const std::string second = o->second_metavar.empty() ? "" : " " + o->second_metavar;
+    if (o->is_required && o->required_unless.empty()) s += " " + o->name + " " + o->metavar + second;
+    else if (o->is_required) s += " [" + o->name + " " + o->metavar + second + "]";
     else optional_options = true;
   }
   return s + (optional_options ? " [options]" : "");
@@ -409,6 +421,7 @@ std::string CommandLine::optionsHelp(bool with_builtins) const {
     std::string head = "  " + o->name;
     if (o->kind == Option::Kind::kChoice) head += " " + joinChoices(o->choices);
     else if (o->kind != Option::Kind::kFlag && o->kind != Option::Kind::kPositional) head += " " + o->metavar;
+    if (!o->second_metavar.empty()) head += " " + o->second_metavar;
     std::string body = o->help;
     if (o->is_required && (o->kind != Option::Kind::kPositional || !o->required_unless.empty()))
       body += o->required_unless.empty() ? " (required)" : " (required unless " + o->required_unless + ")";

@@ -1,5 +1,6 @@
-// ROS 1 bag -> LCM log (rules in rosbag.hpp): select topics, decide the IMU acceleration unit from the
-// first samples, then decode every message and write the events in time order through a reorder window.
+// ROS 1 bag -> LCM log (rules in rosbag.hpp and ros_input.hpp): select topics, decide the IMU acceleration
+// unit from the first samples, then decode every message (RosDecoder, shared with livo-ros-bridge) and write
+// the events in time order through a reorder window.
 #include "livo/datasets/rosbag.hpp"
 #include "livo/io/convert.hpp"
 
@@ -27,7 +28,7 @@ std::string seconds(Utime t) {
 /// single glitched stamp cannot flush, and so drop, everything else; it waits in the buffer for its turn.
 class ReorderBuffer {
  public:
-  using Payload = std::variant<ImuSample, LidarScan, Image>;
+  using Payload = RosPayload;
   static constexpr Utime kJumpUs = 10'000'000;
   ReorderBuffer(SummaryLogWriter& out, Utime window) : out_(out), window_(window) {}
 
@@ -78,10 +79,10 @@ class ReorderBuffer {
   std::map<std::string, std::uint64_t> late_;
 };
 
-/// Counts of things skipped, for the warnings.
+/// Messages skipped as malformed (--skip-bad), for the warnings; the scan rules count in RosDecodeCounts.
 struct Skipped {
-  std::uint64_t empty_scans = 0, long_scans = 0, untimed_scans = 0, nonfinite_points = 0, bad_messages = 0;
-  std::string long_example, bad_example;
+  std::uint64_t bad_messages = 0;
+  std::string long_example, bad_example;  ///< with the message's context
 };
 
 std::string messageContext(const std::string& bag, const BagMessage& m) {
@@ -92,48 +93,37 @@ std::string messageContext(const std::string& bag, const BagMessage& m) {
 void checkOptions(const RosbagOptions& opt) {
   if (!(opt.reorder_window_s >= 0) || !std::isfinite(opt.reorder_window_s))
     throw DatasetError("--reorder-window must be a non-negative number of seconds");
-  if (!(opt.max_scan_span_s > 0)) throw DatasetError("--max-scan-span must be positive");
-  if (opt.mono16_bits != 0 && (opt.mono16_bits < 9 || opt.mono16_bits > 16))
-    throw DatasetError("--mono16-bits must be 9..16 (or 0 to keep GRAY16)");
+  checkRosInputOptions(opt);
 }
 
-RosDecodeOptions decodeOptions(const RosbagOptions& opt, const RosbagTopics& sel) {
-  RosDecodeOptions dec;
-  dec.sensor = !opt.sensor.empty() ? opt.sensor : sel.lidar_type == RosType::LivoxCustomMsg ? "avia" : "generic";
-  dec.point_time_field = opt.point_time_field;
-  dec.mono16_bits = opt.mono16_bits;
-  return dec;
-}
-
-/// |a| of the first `samples` IMU messages, for the unit detection.
-std::vector<double> firstAccelNorms(RosbagReader& bag, const std::string& imu_topic, int samples) {
-  std::vector<double> norms;
-  try {
-    bag.forEach({imu_topic}, [&](const BagMessage& m) {
-      try {
-        norms.push_back(decodeRosImu(m.data->data(), m.data->size()).accel.norm());
-      } catch (const DatasetError&) {  // reported by the main pass
-      }
-      return static_cast<int>(norms.size()) < samples;
-    });
-  } catch (const BagReadError&) {  // a corrupt chunk among the first samples: the main pass reports it
+/// The IMU unit from the bag's first samples (ImuUnitGate, as the live bridge decides it).
+void decideAccelUnit(RosbagReader& bag, const std::string& imu_topic, const RosbagOptions& opt, RosbagSummary& summary) {
+  ImuUnitGate gate(opt);
+  std::vector<ImuSample> released;  // only the decision is needed here
+  if (!gate.decided()) {
+    try {
+      bag.forEach({imu_topic}, [&](const BagMessage& m) {
+        try {
+          gate.push(decodeRosImu(m.data->data(), m.data->size()), released);
+        } catch (const DatasetError&) {  // reported by the main pass
+        }
+        return !gate.decided();
+      });
+    } catch (const BagReadError&) {  // a corrupt chunk among the first samples: the main pass reports it
+    }
+    gate.finish(released);
   }
-  return norms;
+  summary.accel_scale = gate.scale();
+  summary.accel_note = gate.note();
 }
 
-/// The main pass: decodes each message of the chosen topics into the reorder buffer and counts what
-/// it skips. A malformed message stops the pass (DatasetError naming it) unless skip_bad_messages.
+/// The main pass: decodes each message of the chosen topics (RosDecoder) into the reorder buffer. A
+/// malformed message stops the pass (DatasetError naming it) unless skip_bad_messages.
 class MessageConverter {
  public:
-  MessageConverter(const std::string& bag_path, const RosbagOptions& opt, const RosDecodeOptions& dec,
-                   ReorderBuffer& buffer, RosbagSummary& summary, std::uint64_t total)
-      : bag_path_(bag_path),
-        opt_(opt),
-        sel_(summary.topics),
-        dec_(dec),
-        buffer_(buffer),
-        summary_(summary),
-        max_span_ns_(std::llround(opt.max_scan_span_s * 1e9)),
+  MessageConverter(const std::string& bag_path, const RosbagOptions& opt, ReorderBuffer& buffer,
+                   RosbagSummary& summary, std::uint64_t total)
+      : bag_path_(bag_path), opt_(opt), sel_(summary.topics), decoder_(opt), buffer_(buffer), summary_(summary),
         total_(total) {}
 
   /// One message; true: go on (the RosbagReader::forEach callback).
@@ -151,66 +141,46 @@ class MessageConverter {
     return true;
   }
   const Skipped& skipped() const { return skipped_; }
+  const RosDecodeCounts& counts() const { return decoder_.counts(); }
 
  private:
   void decode(const BagMessage& m) {
-    const std::uint8_t* d = m.data->data();
-    const std::size_t n = m.data->size();
-    if (*m.topic == sel_.imu) {
-      ImuSample s = decodeRosImu(d, n);
-      s.accel *= summary_.accel_scale;
-      buffer_.push(&opt_.imu_channel, s.utime, s);
-    } else if (*m.topic == sel_.lidar) {
-      pushScan(m, sel_.lidar_type == RosType::LivoxCustomMsg ? decodeLivoxCustomMsg(d, n, dec_)
-                                                             : decodeRosPointCloud2(d, n, dec_));
-    } else if (*m.topic == sel_.image) {
-      Image img = sel_.image_type == RosType::CompressedImage ? decodeRosCompressedImage(d, n, dec_)
-                                                              : decodeRosImage(d, n, dec_);
-      const Utime t = img.utime;
-      buffer_.push(&opt_.camera_channel, t, std::move(img));
-    }
-  }
-
-  /// The scan into the buffer unless empty or spanning more than max_scan_span_s.
-  void pushScan(const BagMessage& m, DecodedScan ds) {
-    skipped_.nonfinite_points += ds.dropped_nonfinite;
-    if (ds.time_field.empty()) ++skipped_.untimed_scans;
-    if (ds.scan.points.empty()) {
-      ++skipped_.empty_scans;
-    } else if (ds.span_ns > max_span_ns_) {
-      if (skipped_.long_scans++ == 0)
-        skipped_.long_example = messageContext(bag_path_, m) + "points span " + std::to_string(ds.span_ns * 1e-9) +
-                                " s (time field '" + ds.time_field + "')";
-    } else {
-      const Utime t = ds.scan.utime;
-      buffer_.push(&opt_.lidar_channel, t, std::move(ds.scan));
-    }
+    const bool imu = *m.topic == sel_.imu, lidar = *m.topic == sel_.lidar;
+    const RosType type = imu ? RosType::Imu : lidar ? sel_.lidar_type : sel_.image_type;
+    const std::uint64_t long_before = decoder_.counts().long_scans;
+    std::optional<RosPayload> p = decoder_.decode(type, m.data->data(), m.data->size());
+    if (long_before == 0 && decoder_.counts().long_scans == 1)
+      skipped_.long_example = messageContext(bag_path_, m) + decoder_.counts().long_example;
+    if (!p) return;
+    if (auto* s = std::get_if<ImuSample>(&*p)) s->accel *= summary_.accel_scale;
+    const std::string* channel = imu ? &opt_.imu_channel : lidar ? &opt_.lidar_channel : &opt_.camera_channel;
+    const Utime t = payloadUtime(*p);
+    buffer_.push(channel, t, std::move(*p));
   }
 
   const std::string& bag_path_;
   const RosbagOptions& opt_;
   const RosbagTopics& sel_;
-  const RosDecodeOptions& dec_;
+  RosDecoder decoder_;
   ReorderBuffer& buffer_;
   RosbagSummary& summary_;
-  const std::int64_t max_span_ns_;
   const std::uint64_t total_;  ///< messages on the chosen topics, for the progress callback
   Skipped skipped_;
 };
 
 void addWarnings(RosbagSummary& summary, const ReorderBuffer& buffer, const Skipped& skipped,
-                 const RosbagOptions& opt) {
+                 const RosDecodeCounts& counts, const RosbagOptions& opt) {
   auto warn = [&](std::uint64_t count, const std::string& what) {
     if (count > 0) summary.warnings.push_back(std::to_string(count) + " " + what);
   };
   for (const auto& [channel, count] : buffer.late())
     warn(count, channel + " events arrived later than the reorder window (" + std::to_string(opt.reorder_window_s) +
                     " s) and were dropped (use --reorder-window, or check the stamps)");
-  warn(skipped.empty_scans, "empty scans skipped");
-  warn(skipped.long_scans, "scans skipped: point times span more than " + std::to_string(opt.max_scan_span_s) +
-                               " s, wrong time unit? First: " + skipped.long_example);
-  warn(skipped.untimed_scans, "scans without a per-point time field: offsets 0 (undistortion impossible)");
-  warn(skipped.nonfinite_points, "points with non-finite coordinates dropped");
+  warn(counts.empty_scans, "empty scans skipped");
+  warn(counts.long_scans, "scans skipped: point times span more than " + std::to_string(opt.max_scan_span_s) +
+                              " s, wrong time unit? First: " + skipped.long_example);
+  warn(counts.untimed_scans, "scans without a per-point time field: offsets 0 (undistortion impossible)");
+  warn(counts.nonfinite_points, "points with non-finite coordinates dropped");
   warn(skipped.bad_messages, "malformed messages skipped (--skip-bad). First: " + skipped.bad_example);
 }
 
@@ -235,15 +205,9 @@ RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_
   RosbagSummary summary;
   summary.topics = selectRosbagTopics(bag.topics(), opt, bag_path);
   const RosbagTopics& sel = summary.topics;
-  const RosDecodeOptions dec = decodeOptions(opt, sel);
 
   // 2. IMU acceleration unit from the first samples.
-  if (!sel.imu.empty()) {
-    const std::vector<double> norms = opt.imu_accel_unit == AccelUnit::Auto
-                                          ? firstAccelNorms(bag, sel.imu, opt.imu_unit_samples)
-                                          : std::vector<double>{};
-    summary.accel_scale = detectAccelScale(norms, opt, summary.accel_note);
-  }
+  if (!sel.imu.empty()) decideAccelUnit(bag, sel.imu, opt, summary);
 
   // 3. Every message of the chosen topics, in record order, through the reorder buffer.
   std::vector<std::string> wanted;
@@ -252,7 +216,7 @@ RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_
   const std::uint64_t total = bag.messageCount(wanted);
   SummaryLogWriter out(out_log);
   ReorderBuffer buffer(out, static_cast<Utime>(std::llround(opt.reorder_window_s * 1e6)));
-  MessageConverter converter(bag_path, opt, dec, buffer, summary, total);
+  MessageConverter converter(bag_path, opt, buffer, summary, total);
   try {
     bag.forEach(wanted, [&](const BagMessage& m) { return converter.onMessage(m); });
   } catch (const DatasetError& e) {
@@ -262,7 +226,7 @@ RosbagSummary convertRosbag(const std::string& bag_path, const std::string& out_
   summary.conversion = out.commit();
 
   // 4. Warnings.
-  addWarnings(summary, buffer, converter.skipped(), opt);
+  addWarnings(summary, buffer, converter.skipped(), converter.counts(), opt);
   return summary;
 }
 

@@ -127,7 +127,8 @@ Validation fromMsg(const livo::lidar_scan_t& m, LidarScan& out, const MessageLim
 }
 
 // ---------------- Image ----------------
-livo::image_t toMsg(const Image& img) {
+namespace {
+livo::image_t imageHeader(const Image& img) {
   livo::image_t m{};
   m.utime = img.utime;
   m.width = img.width;
@@ -136,7 +137,19 @@ livo::image_t toMsg(const Image& img) {
   m.pixel_format = static_cast<std::int8_t>(img.format);
   m.exposure_time_s = img.exposure_time_s;
   m.size = static_cast<std::int32_t>(img.data.size());
+  return m;
+}
+}  // namespace
+
+livo::image_t toMsg(const Image& img) {
+  livo::image_t m = imageHeader(img);
   m.data = img.data;
+  return m;
+}
+
+livo::image_t toMsg(Image&& img) {
+  livo::image_t m = imageHeader(img);
+  m.data = std::move(img.data);
   return m;
 }
 

@@ -50,6 +50,9 @@ class Option {
   /// Shown instead of the default taken from the destination ("" hides the default); with a unit the
   /// help reads "[s; default: <text>]".
   Option& defaultText(std::string text);
+  /// The option's value is followed by a second word, any text, stored in `dst`
+  /// ("--screenshot-at S FILE"; "--screenshot-at=S FILE" too). Not for flags.
+  Option& andText(std::string metavar, std::string* dst);
 
  private:
   friend class CommandLine;
@@ -69,6 +72,8 @@ class Option {
   std::function<void(std::int64_t)> set_int;
   std::function<void(double)> set_number;
   std::function<void()> set_flag;
+  std::string second_metavar;  ///< andText(): the second word's metavar, "" without one
+  std::function<void(const std::string&)> set_second;
 };
 
 class CommandLine {

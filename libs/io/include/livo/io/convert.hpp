@@ -43,6 +43,8 @@ struct Validation {
 livo::imu_t toMsg(const ImuSample& s);
 livo::lidar_scan_t toMsg(const LidarScan& s);
 livo::image_t toMsg(const Image& img);
+/// The pixels move into the message (no copy); `img` is left without data.
+livo::image_t toMsg(Image&& img);
 livo::frame_t toMsg(const Frame& f);
 
 // ---- message -> struct, with validation (finite values, counts match arrays, sizes sane) ----
