@@ -32,8 +32,8 @@ LIVO_PACKAGES=(
   iproute2
   clang libclang-rt-14-dev
 )
-# The targets of the demo (livo-report is a script copied into build/bin by its target).
-LIVO_DEMO_TARGETS=(livo-sim livo-run livo-eval livo-report)
+# The targets of the demo (livo-report, a Python script, is copied into build/bin when CMake configures).
+LIVO_DEMO_TARGETS=(livo-sim livo-run livo-eval)
 
 log() { printf '[livo] %s\n' "$*" >&2; }
 

@@ -32,6 +32,8 @@ struct RunSummary {
   double first_pose_s = -1.0;  ///< first pose, seconds after the first simulated sample
   double max_pose_gap_s = 0.0; ///< largest step between consecutive poses
   livo::ImageCheckCounters image_counters;
+  std::vector<bool> lidar_failed;  ///< per pose in `est`: its LiDAR update failed
+  double t_start = 0.0;            ///< first simulated sample, seconds
 };
 
 /// Optional hook that may change (or drop: return false) each image before the pipeline sees it.
@@ -59,6 +61,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
   std::vector<double> lio_ms;
   double sigma_sum = 0;
   const double t_start = toSeconds(sc.startUtime());
+  out.t_start = t_start;
   const auto onFrame = [&](const Frame& f, const FrameResult& r) {
     ++out.frames;
     out.frames_without_image += !f.has_image;
@@ -70,6 +73,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
     out.degenerate_frames += r.degenerate;
     out.lio_ok_frames += r.lio.lio_ok;
     out.lidar_failed_frames += r.lidarFailed();
+    out.lidar_failed.push_back(r.lidarFailed());
     out.images += f.has_image;
     out.visual_frames += r.visual_used;
     sigma_sum += r.lio.sigma_min;

@@ -3,7 +3,7 @@
 //
 // LIVO_FRAME in; per frame a LIVO_MAP_QUERY to livo-mapserver and its LIVO_SUBMAP back, then
 // LIVO_MAP_UPDATE, LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and LIVO_ESTIMATOR_STATS out (libs/process
-// EstimatorNode around RemoteEstimator). Reads the rig sections the pipeline uses, `estimator` and
+// EstimatorNode around FramePipeline with RemoteMap). Reads the rig sections the pipeline uses, `estimator` and
 // `channels`. Exits on SIGINT / SIGTERM (or --idle-exit) after the queued frames, with a summary.
 #include "livo/common/config.hpp"
 #include "livo/io/channels.hpp"

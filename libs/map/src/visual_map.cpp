@@ -56,20 +56,10 @@ ImageGrid VisualMap::gridFor(const CameraModel& cam) const {
   return ImageGrid(cam.width(), cam.height(), config_.grid_cell_px);
 }
 
-std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                                  const std::vector<Vec3>& scan_points_world,
-                                                  std::vector<Vec2>* pixels,
-                                                  const std::vector<VoxelKey>* voxel_keys) {
-  const ImageGrid grid = gridFor(cam);
-  occupied_.assign(std::size_t(grid.size()), false);
-  retrieval_ = VisualRetrievalStats{};
-  if (pixels) pixels->clear();
-  std::vector<VisualPoint*> out;
-  const Pose T_camera_world = T_world_camera.inverse();
-
-  // 1. Visual voxels touched by the scan (floor keys: no off-by-one for negative coordinates), or the
-  // given keys. Only voxels that exist in the visual hash are collected, then deduplicated (sort +
-  // unique).
+// Step 1 of pointsInView: the visual voxels touched by the scan (floor keys: no off-by-one for negative
+// coordinates), or the given keys. Only voxels that exist in the visual hash are collected, then
+// deduplicated (sort + unique).
+void VisualMap::collectSearchedVoxels(const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys) {
   searched_.clear();
   if (voxel_keys != nullptr) {
     for (const VoxelKey& k : *voxel_keys) {
@@ -92,6 +82,43 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
   std::sort(searched_.begin(), searched_.end());
   searched_.erase(std::unique(searched_.begin(), searched_.end()), searched_.end());
   retrieval_.visual_voxels = searched_.size();
+}
+
+// Step 3 of pointsInView: the scan's sparse depth image (smallest depth per pixel) in depth_.
+void VisualMap::rasterDepth(const CameraModel& cam, const Pose& T_camera_world, const std::vector<Vec3>& scan_points_world) {
+  const int w = cam.width(), h = cam.height();
+  if (depth_.size() != std::size_t(w) * std::size_t(h)) depth_.assign(std::size_t(w) * std::size_t(h), 0.f);
+  for (const Vec3& p : scan_points_world) {
+    if (!p.allFinite()) continue;
+    const Vec3 p_cam = T_camera_world * p;
+    if (!(p_cam.z() > 0.0)) continue;
+    Vec2 px;
+    if (!cam.project(p_cam, px)) continue;
+    const double ux = std::round(px.x()), uy = std::round(px.y());
+    if (!(ux >= 0.0 && uy >= 0.0 && ux < w && uy < h)) continue;
+    const std::size_t idx = std::size_t(uy) * std::size_t(w) + std::size_t(ux);
+    const float z = static_cast<float>(p_cam.z());
+    if (depth_[idx] == 0.f) {
+      depth_touched_.push_back(int(idx));
+      depth_[idx] = z;
+    } else if (z < depth_[idx]) {
+      depth_[idx] = z;
+    }
+  }
+}
+
+std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
+                                                  const std::vector<Vec3>& scan_points_world,
+                                                  std::vector<Vec2>* pixels,
+                                                  const std::vector<VoxelKey>* voxel_keys) {
+  const ImageGrid grid = gridFor(cam);
+  occupied_.assign(std::size_t(grid.size()), false);
+  retrieval_ = VisualRetrievalStats{};
+  if (pixels) pixels->clear();
+  std::vector<VisualPoint*> out;
+  const Pose T_camera_world = T_world_camera.inverse();
+
+  collectSearchedVoxels(scan_points_world, voxel_keys);
 
   // 2. Per grid cell, the qualifying point with the smallest depth.
   struct Best {
@@ -119,26 +146,7 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
   // 3. Sparse depth image of the scan (smallest depth per pixel), only when a candidate needs it.
   const int w = cam.width(), h = cam.height();
   const bool any = std::any_of(best.begin(), best.end(), [](const Best& b) { return b.point != nullptr; });
-  if (any) {
-    if (depth_.size() != std::size_t(w) * std::size_t(h)) depth_.assign(std::size_t(w) * std::size_t(h), 0.f);
-    for (const Vec3& p : scan_points_world) {
-      if (!p.allFinite()) continue;
-      const Vec3 p_cam = T_camera_world * p;
-      if (!(p_cam.z() > 0.0)) continue;
-      Vec2 px;
-      if (!cam.project(p_cam, px)) continue;
-      const double ux = std::round(px.x()), uy = std::round(px.y());
-      if (!(ux >= 0.0 && uy >= 0.0 && ux < w && uy < h)) continue;
-      const std::size_t idx = std::size_t(uy) * std::size_t(w) + std::size_t(ux);
-      const float z = static_cast<float>(p_cam.z());
-      if (depth_[idx] == 0.f) {
-        depth_touched_.push_back(int(idx));
-        depth_[idx] = z;
-      } else if (z < depth_[idx]) {
-        depth_[idx] = z;
-      }
-    }
-  }
+  if (any) rasterDepth(cam, T_camera_world, scan_points_world);
 
   // 4. Occlusion: a scan point within +-window px closer by more than occlusion_depth_m.
   const int win = config_.occlusion_window_px;

@@ -171,6 +171,8 @@ class VisualMap {
   const VisualMapConfig& config() const { return config_; }
 
  private:
+  void collectSearchedVoxels(const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys);
+  void rasterDepth(const CameraModel& cam, const Pose& T_camera_world, const std::vector<Vec3>& scan_points_world);
   /// Scores every observation of p (see refine) and returns the index of the best (-1: none).
   int scoreObservations(VisualPoint& p) const;
   void index(VisualPoint* p);
