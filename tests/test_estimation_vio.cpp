@@ -117,6 +117,63 @@ TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
   EXPECT_EQ(checked, 3 * 9 * 7);
 }
 
+// The update's normal equations, built from per-point moments of the image gradient, intensity and
+// residual, equal the brute-force sum of H^T H and H^T r over photometricResidual's rows (one per patch
+// pixel), for several points, warps, every level, with and without exposure; points partly outside the
+// image contribute the same pixels to both.
+TEST(VioUpdate, NormalEquationsFromMomentsEqualTheSumOfPixelRows) {
+  const Image img = syntheticImage(320, 240);
+  const Image cur = syntheticImage(320, 240, 0.93);
+  const auto cam = CameraModel::create(pinholeConfig(320, 240));
+  const Pose T_imu_camera = Pose::Identity();
+  std::vector<VisualPoint> store;
+  std::vector<Eigen::Matrix2d> warps;
+  for (const Vec2& px : {Vec2(150.3, 110.7), Vec2(60.2, 40.9), Vec2(250.6, 180.1), Vec2(20.4, 200.2)}) {
+    VisualPoint p;
+    if (!planePoint(*cam, img, px, 3.0 + 0.01 * px.x(), p)) continue;
+    store.push_back(p);
+    Eigen::Matrix2d A;
+    A << 1.02, 0.03, -0.05, 0.97;
+    warps.push_back(store.size() % 2 ? A : Eigen::Matrix2d::Identity());
+  }
+  ASSERT_GE(store.size(), 3u);
+  std::vector<const VisualPoint*> points;
+  for (const VisualPoint& p : store) points.push_back(&p);
+  NavState x;
+  x.R_world_imu = expSO3(Vec3(0.004, -0.003, 0.002));
+  x.p_world_imu = Vec3(0.03, -0.02, 0.01);
+  x.inv_exposure = 1.07;
+  const double inv_var = 1.0 / 68.0;
+  for (const bool exposure : {true, false}) {
+    for (int level = 0; level < PatchPyramid::kLevels; ++level) {
+      Eigen::Matrix<double, 7, 7> HtH = Eigen::Matrix<double, 7, 7>::Zero();
+      Eigen::Matrix<double, 7, 1> Htr = Eigen::Matrix<double, 7, 1>::Zero();
+      double cost = 0;
+      std::size_t n = 0;
+      for (std::size_t i = 0; i < points.size(); ++i)
+        for (int row = 0; row < PatchPyramid::kSize; ++row)
+          for (int col = 0; col < PatchPyramid::kSize; ++col) {
+            double r;
+            Eigen::Matrix<double, 1, 7> H;
+            if (!photometricResidual(x, cur, *cam, T_imu_camera, *points[i], warps[i], level, row, col, r, &H)) continue;
+            if (!exposure) H(6) = 0;
+            HtH += H.transpose() * H * inv_var;
+            Htr += H.transpose() * r * inv_var;
+            cost += r * r;
+            ++n;
+          }
+      const PhotometricNormalEquations ne =
+          photometricNormalEquations(x, cur, *cam, T_imu_camera, points, warps, level, inv_var, exposure);
+      SCOPED_TRACE("level " + std::to_string(level) + (exposure ? " with exposure" : " without exposure"));
+      ASSERT_GT(n, 100u);
+      EXPECT_EQ(ne.pixels, n);
+      EXPECT_NEAR(ne.cost, cost, 1e-9 * cost);
+      EXPECT_LE((ne.HtRH - HtH).norm(), 1e-9 * HtH.norm());
+      EXPECT_LE((ne.HtRz - Htr).norm(), 1e-9 * Htr.norm() + 1e-12);
+    }
+  }
+}
+
 TEST(VioUpdate, PlaneWarpMatchesClosedForm) {
   // Fronto-parallel plane at 4 m; current camera 1 m closer along the axis: displacements scale by
   // d_cur / d_ref = 3 / 4 from current to reference.

@@ -1,5 +1,6 @@
 #include "livo/estimation/vio_update.hpp"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -23,12 +24,32 @@ using Row7 = Eigen::Matrix<double, 1, 7>;
 using Mat7 = Eigen::Matrix<double, 7, 7>;
 using Vec7 = Eigen::Matrix<double, 7, 1>;
 
+constexpr int kN = PatchPyramid::kSize;
+constexpr int kL = PatchPyramid::kLevels;
+
 struct PointState {
   const VisualPoint* point = nullptr;
   const VisualObservation* ref = nullptr;
   Eigen::Matrix2d A = Eigen::Matrix2d::Identity();  // d px_ref / d px_cur
   bool used = false;
+  /// tau_ref * P_ref at every patch pixel of every level, warped by A: fixed during the update, so
+  /// sampled once (NaN: outside the reference crop).
+  std::array<double, std::size_t(kL * kN * kN)> ref_values{};
+  double refValue(int level, int row, int col) const { return ref_values[std::size_t((level * kN + row) * kN + col)]; }
 };
+
+/// Samples the reference patch of `ps` through its warp at every pixel of every level.
+void precomputeReference(PointState& ps) {
+  for (int level = 0; level < kL; ++level)
+    for (int row = 0; row < kN; ++row)
+      for (int col = 0; col < kN; ++col) {
+        const Vec2 d_ref = ps.A * Vec2(patchOffset(col), patchOffset(row));
+        float P_ref = 0;
+        ps.ref_values[std::size_t((level * kN + row) * kN + col)] =
+            ps.ref->patch.sample(level, d_ref.x(), d_ref.y(), P_ref) ? double(ps.ref->inv_exposure) * P_ref
+                                                                     : std::numeric_limits<double>::quiet_NaN();
+      }
+}
 
 struct Linearization {
   Mat7 HtRH = Mat7::Zero();
@@ -137,43 +158,109 @@ bool photometricResidual(const NavState& x, const Image& gray, const CameraModel
 
 namespace {
 
-constexpr int kN = PatchPyramid::kSize;
+/// The current image around a point's pixel at one level, sampled once: the patch pixels and a ring of
+/// one sample around them (the central differences' neighbours), at px + (i - (kN - 1) / 2) stride for
+/// i = -1 .. kN. NaN where a sample falls outside the image.
+struct CurrentGrid {
+  static constexpr int kG = kN + 2;
+  std::array<float, std::size_t(kG * kG)> v{};
+  float at(int gi, int gj) const { return v[std::size_t(gi * kG + gj)]; }  // row, column of the grid
+
+  void sample(const Image& gray, const Vec2& px, int level) {
+    const double stride = double(1 << level);
+    for (int gi = 0; gi < kG; ++gi) {
+      const double y = px.y() + patchOffset(gi - 1) * stride;
+      for (int gj = 0; gj < kG; ++gj) {
+        float I = 0;
+        v[std::size_t(gi * kG + gj)] = sampleBilinear(gray, px.x() + patchOffset(gj - 1) * stride, y, I)
+                                           ? I
+                                           : std::numeric_limits<float>::quiet_NaN();
+      }
+    }
+  }
+};
 
 /// RMS of a point's patch residuals at one level; -1 when fewer than half the samples are usable.
 double pointRms(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic, const PointState& ps,
                 int level) {
-  double sq = 0;
-  int n = 0;
   PointProjection pp;
   if (!projectForPatch(x, T_ic, cam, ps.point->p_world, false, pp)) return -1.0;
-  for (int row = 0; row < kN; ++row)
+  const double stride = double(1 << level);
+  double sq = 0;
+  int n = 0;
+  for (int row = 0; row < kN; ++row) {
+    const double y = pp.px.y() + patchOffset(row) * stride;
     for (int col = 0; col < kN; ++col) {
-      double r;
-      if (!pixelResidual(x, gray, *ps.ref, ps.A, pp, level, row, col, false, r, nullptr)) continue;
+      const double P = ps.refValue(level, row, col);
+      float I = 0;
+      if (std::isnan(P) || !sampleBilinear(gray, pp.px.x() + patchOffset(col) * stride, y, I)) continue;
+      const double r = x.inv_exposure * I - P;
       sq += r * r;
       ++n;
     }
+  }
   return n >= kN * kN / 2 ? std::sqrt(sq / n) : -1.0;
+}
+
+/// Sums of one point's patch over its usable pixels: with g = tau d I / d px (1 x 2) and the pixel's
+/// row H = [g J, I] (J = d px / d [dtheta, dp], the same for every pixel of the patch), H^T H and
+/// H^T r follow from the moments of g, I and r, so each pixel costs a few products instead of a 7 x 7
+/// outer product.
+struct PatchMoments {
+  Eigen::Matrix2d gg = Eigen::Matrix2d::Zero();  // sum g^T g
+  Vec2 gI = Vec2::Zero(), gr = Vec2::Zero();     // sum g^T I, sum g^T r
+  double II = 0, Ir = 0, rr = 0;
+  std::size_t n = 0;
+};
+
+PatchMoments patchMoments(const NavState& x, const CurrentGrid& grid, const PointState& ps, int level) {
+  const double inv2s = 1.0 / (2.0 * double(1 << level));
+  PatchMoments m;
+  for (int row = 0; row < kN; ++row)
+    for (int col = 0; col < kN; ++col) {
+      const double P = ps.refValue(level, row, col);
+      const float I = grid.at(row + 1, col + 1);
+      const float Ixp = grid.at(row + 1, col + 2), Ixm = grid.at(row + 1, col);
+      const float Iyp = grid.at(row + 2, col + 1), Iym = grid.at(row, col + 1);
+      if (std::isnan(P) || std::isnan(I) || std::isnan(Ixp) || std::isnan(Ixm) || std::isnan(Iyp) || std::isnan(Iym))
+        continue;
+      const double r = x.inv_exposure * I - P;
+      const Vec2 g = x.inv_exposure * Vec2((Ixp - Ixm) * inv2s, (Iyp - Iym) * inv2s);
+      m.gg.noalias() += g * g.transpose();
+      m.gI += g * double(I);
+      m.gr += g * r;
+      m.II += double(I) * I;
+      m.Ir += double(I) * r;
+      m.rr += r * r;
+      ++m.n;
+    }
+  return m;
 }
 
 Linearization linearize(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
                         const std::vector<PointState>& pts, int level, double inv_var, bool exposure) {
   Linearization lin;
-  Row7 H;
+  CurrentGrid grid;
   for (const auto& ps : pts) {
     if (!ps.used) continue;
     PointProjection pp;
     if (!projectForPatch(x, T_ic, cam, ps.point->p_world, true, pp)) continue;
-    for (int row = 0; row < kN; ++row)
-      for (int col = 0; col < kN; ++col) {
-        double r;
-        if (!pixelResidual(x, gray, *ps.ref, ps.A, pp, level, row, col, true, r, &H)) continue;
-        if (!exposure) H(6) = 0.0;
-        lin.HtRH.noalias() += H.transpose() * H * inv_var;
-        lin.HtRz.noalias() += H.transpose() * r * inv_var;
-        lin.cost += r * r;
-        ++lin.n;
-      }
+    grid.sample(gray, pp.px, level);
+    const PatchMoments m = patchMoments(x, grid, ps, level);
+    if (m.n == 0) continue;
+    Eigen::Matrix<double, 2, 6> J;
+    J << pp.J_theta, pp.J_pos;
+    lin.HtRH.topLeftCorner<6, 6>().noalias() += inv_var * (J.transpose() * m.gg * J);
+    lin.HtRz.head<6>().noalias() += inv_var * (J.transpose() * m.gr);
+    if (exposure) {
+      const Eigen::Matrix<double, 6, 1> c = inv_var * (J.transpose() * m.gI);
+      lin.HtRH.block<6, 1>(0, 6) += c;
+      lin.HtRH.block<1, 6>(6, 0) += c.transpose();
+      lin.HtRH(6, 6) += inv_var * m.II;
+      lin.HtRz(6) += inv_var * m.Ir;
+    }
+    lin.cost += m.rr;
+    lin.n += m.n;
   }
   return lin;
 }
@@ -195,6 +282,7 @@ double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, 
       continue;
     }
     if (cfg.normal_warp) ps.A = warpRefFromCur(*ps.point, *ps.ref, T_world_camera, cam);
+    precomputeReference(ps);
     const double rms = pointRms(x, gray, cam, T_imu_camera, ps, 0);
     ps.used = rms >= 0 && rms <= cfg.outlier_rms;
     if (ps.used) {
@@ -270,6 +358,30 @@ void posteriorErrors(const NavState& x, const Image& gray, const CameraModel& ca
 }
 
 }  // namespace
+
+PhotometricNormalEquations photometricNormalEquations(const NavState& x, const Image& gray, const CameraModel& cam,
+                                                      const Pose& T_imu_camera, const std::vector<const VisualPoint*>& points,
+                                                      const std::vector<Eigen::Matrix2d>& warps, int level,
+                                                      double inv_var, bool exposure) {
+  std::vector<PointState> pts;
+  for (std::size_t i = 0; i < points.size() && i < warps.size(); ++i) {
+    PointState ps;
+    ps.point = points[i];
+    ps.ref = points[i] ? points[i]->referenceObs() : nullptr;
+    if (!ps.ref) continue;
+    ps.A = warps[i];
+    ps.used = true;
+    precomputeReference(ps);
+    pts.push_back(ps);
+  }
+  const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, exposure);
+  PhotometricNormalEquations out;
+  out.HtRH = lin.HtRH;
+  out.HtRz = lin.HtRz;
+  out.cost = lin.cost;
+  out.pixels = lin.n;
+  return out;
+}
 
 VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                              const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg) {

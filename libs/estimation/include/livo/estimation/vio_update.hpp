@@ -50,6 +50,20 @@ bool photometricResidual(const NavState& x, const Image& gray, const CameraModel
                          const VisualPoint& p, const Eigen::Matrix2d& A_ref_from_cur, int level, int row, int col,
                          double& r, Eigen::Matrix<double, 1, 7>* H);
 
+/// The normal equations the update builds from `points` (each with a reference observation) at state x
+/// on one pyramid level: over every usable patch pixel, H^T H inv_var, H^T r inv_var, sum r^2 and the
+/// pixel count, H and r as in photometricResidual (the exposure column zeroed unless `exposure`).
+/// Exposed for the tests: they compare it with the sum of photometricResidual's rows.
+struct PhotometricNormalEquations {
+  Eigen::Matrix<double, 7, 7> HtRH = Eigen::Matrix<double, 7, 7>::Zero();
+  Eigen::Matrix<double, 7, 1> HtRz = Eigen::Matrix<double, 7, 1>::Zero();
+  double cost = 0.0;
+  std::size_t pixels = 0;
+};
+PhotometricNormalEquations photometricNormalEquations(const NavState& x, const Image& gray, const CameraModel& cam,
+                                                      const Pose& T_imu_camera, const std::vector<const VisualPoint*>& points,
+                                                      const std::vector<Eigen::Matrix2d>& warps, int level,
+                                                      double inv_var, bool exposure);
 /// Affine map of pixel displacements from the current image to the reference one, d px_ref / d px_cur,
 /// from the point's plane (position + normal), by central differences through both camera models.
 /// Identity when the plane is seen edge-on or a projection fails.
