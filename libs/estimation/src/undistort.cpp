@@ -33,8 +33,19 @@ struct Interval {
     Vec3 r = q;
     if (rate > 0.0) {
       const double th = rate * dt;
+      double s, c1;  // sin(th), 1 - cos(th)
+      if (std::abs(th) < 0.1) {
+        // Within one IMU interval the angle is small: the series to th^6 agrees with sin / cos to
+        // 2e-11 relative (th^7 / 5040), at a fraction of their cost.
+        const double t2 = th * th;
+        s = th * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0));
+        c1 = t2 * 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0));
+      } else {
+        s = std::sin(th);
+        c1 = 1.0 - std::cos(th);
+      }
       const Vec3 kq = axis.cross(q);
-      r += std::sin(th) * kq + (1.0 - std::cos(th)) * axis.cross(kq);
+      r += s * kq + c1 * axis.cross(kq);
     }
     return R_end_k * r + p_end_k + v_end * dt + (0.5 * dt * dt) * a_end;
   }
