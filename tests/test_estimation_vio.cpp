@@ -128,7 +128,7 @@ TEST(VioUpdate, NormalEquationsFromMomentsEqualTheSumOfPixelRows) {
   const Pose T_imu_camera = Pose::Identity();
   std::vector<VisualPoint> store;
   std::vector<Eigen::Matrix2d> warps;
-  for (const Vec2& px : {Vec2(150.3, 110.7), Vec2(60.2, 40.9), Vec2(250.6, 180.1), Vec2(20.4, 200.2)}) {
+  for (const Vec2& px : {Vec2(150.3, 110.7), Vec2(60.2, 40.9), Vec2(250.6, 180.1), Vec2(23.4, 200.2), Vec2(296.0, 23.0)}) {
     VisualPoint p;
     if (!planePoint(*cam, img, px, 3.0 + 0.01 * px.x(), p)) continue;
     store.push_back(p);
@@ -136,15 +136,18 @@ TEST(VioUpdate, NormalEquationsFromMomentsEqualTheSumOfPixelRows) {
     A << 1.02, 0.03, -0.05, 0.97;
     warps.push_back(store.size() % 2 ? A : Eigen::Matrix2d::Identity());
   }
-  ASSERT_GE(store.size(), 3u);
+  ASSERT_GE(store.size(), 4u);
+  bool partial = false;  // some patch pixels outside the current image
   std::vector<const VisualPoint*> points;
   for (const VisualPoint& p : store) points.push_back(&p);
   NavState x;
   x.R_world_imu = expSO3(Vec3(0.004, -0.003, 0.002));
-  x.p_world_imu = Vec3(0.03, -0.02, 0.01);
   x.inv_exposure = 1.07;
   const double inv_var = 1.0 / 68.0;
+  // Near the prior, and moved by ~10 px so that the border points' patches leave the image in part.
+  for (const Vec3& p_world_imu : {Vec3(0.03, -0.02, 0.01), Vec3(0.1, 0.08, 0.0)})
   for (const bool exposure : {true, false}) {
+    x.p_world_imu = p_world_imu;
     for (int level = 0; level < PatchPyramid::kLevels; ++level) {
       Eigen::Matrix<double, 7, 7> HtH = Eigen::Matrix<double, 7, 7>::Zero();
       Eigen::Matrix<double, 7, 1> Htr = Eigen::Matrix<double, 7, 1>::Zero();
@@ -164,14 +167,17 @@ TEST(VioUpdate, NormalEquationsFromMomentsEqualTheSumOfPixelRows) {
           }
       const PhotometricNormalEquations ne =
           photometricNormalEquations(x, cur, *cam, T_imu_camera, points, warps, level, inv_var, exposure);
-      SCOPED_TRACE("level " + std::to_string(level) + (exposure ? " with exposure" : " without exposure"));
+      SCOPED_TRACE("level " + std::to_string(level) + (exposure ? " with exposure" : " without exposure") +
+                   " at x " + std::to_string(p_world_imu.x()));
       ASSERT_GT(n, 100u);
+      if (p_world_imu.x() > 0.05 && level == 2) partial = partial || n < points.size() * 64;
       EXPECT_EQ(ne.pixels, n);
       EXPECT_NEAR(ne.cost, cost, 1e-9 * cost);
       EXPECT_LE((ne.HtRH - HtH).norm(), 1e-9 * HtH.norm());
       EXPECT_LE((ne.HtRz - Htr).norm(), 1e-9 * Htr.norm() + 1e-12);
     }
   }
+  EXPECT_TRUE(partial) << "the moved state must put part of a patch outside the image";
 }
 
 TEST(VioUpdate, PlaneWarpMatchesClosedForm) {
