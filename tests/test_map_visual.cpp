@@ -413,3 +413,37 @@ TEST(VisualRetrieval, TimingFor1000PointsInView) {
             << " in image, " << selected << " selected: median " << s.median << " ms, max " << s.max << " ms\n";
   EXPECT_GT(selected, 100u);
 }
+
+// The grid sampler returns sampleBilinear's values bit for bit, NaN exactly where sampleBilinear refuses
+// (outside [0, w-1] x [0, h-1], the last column and row included, non-finite coordinates).
+TEST(VisualPatch, GridSamplerIsBitIdenticalToSampleBilinear) {
+  std::mt19937 rng(7);
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{40, 30}, {2, 2}, {1, 5}, {64, 3}}) {
+    Image img;
+    img.width = w;
+    img.height = h;
+    img.row_stride = w;
+    img.data.resize(std::size_t(w * h));
+    for (auto& b : img.data) b = static_cast<std::uint8_t>(rng() % 256);
+    std::uniform_real_distribution<double> ux(-3.0, w + 2.0), uy(-3.0, h + 2.0);
+    for (int trial = 0; trial < 50; ++trial) {
+      double xs[12], ys[10];
+      for (double& x : xs) x = ux(rng);
+      for (double& y : ys) y = uy(rng);
+      xs[0] = w - 1, xs[1] = 0.0, ys[0] = h - 1, ys[1] = 0.0;  // the edges themselves
+      xs[2] = std::numeric_limits<double>::quiet_NaN();
+      float out[12 * 10];
+      sampleBilinearGrid(img, xs, 12, ys, 10, out);
+      for (int j = 0; j < 10; ++j)
+        for (int i = 0; i < 12; ++i) {
+          float v = 0;
+          const bool ok = sampleBilinear(img, xs[i], ys[j], v);
+          if (!ok) {
+            EXPECT_TRUE(std::isnan(out[j * 12 + i])) << w << "x" << h << " at " << xs[i] << ", " << ys[j];
+          } else {
+            EXPECT_EQ(out[j * 12 + i], v) << w << "x" << h << " at " << xs[i] << ", " << ys[j];
+          }
+        }
+    }
+  }
+}

@@ -167,52 +167,14 @@ struct CurrentGrid {
   std::array<float, std::size_t(kG * kG)> v{};
   float at(int gi, int gj) const { return v[std::size_t(gi * kG + gj)]; }  // row, column of the grid
 
-  /// The values of sampleBilinear at the grid's positions, bit for bit: the same coordinates and the
-  /// same arithmetic, with the column and row parts (index, weight, bounds) computed once per grid line.
   void sample(const Image& gray, const Vec2& px, int level) {
     const double stride = double(1 << level);
-    if (gray.width < 2 || gray.height < 2) {  // degenerate images: the general sampler
-      for (int gi = 0; gi < kG; ++gi)
-        for (int gj = 0; gj < kG; ++gj) {
-          float I = 0;
-          v[std::size_t(gi * kG + gj)] =
-              sampleBilinear(gray, px.x() + patchOffset(gj - 1) * stride, px.y() + patchOffset(gi - 1) * stride, I)
-                  ? I
-                  : std::numeric_limits<float>::quiet_NaN();
-        }
-      return;
+    double xs[kG], ys[kG];
+    for (int g = 0; g < kG; ++g) {
+      xs[g] = px.x() + patchOffset(g - 1) * stride;
+      ys[g] = px.y() + patchOffset(g - 1) * stride;
     }
-    std::array<int, kG> x0{};
-    std::array<double, kG> ax{};
-    std::array<bool, kG> x_ok{};
-    for (int gj = 0; gj < kG; ++gj) {
-      const double x = px.x() + patchOffset(gj - 1) * stride;
-      x_ok[std::size_t(gj)] = x >= 0.0 && x <= gray.width - 1;
-      if (!x_ok[std::size_t(gj)]) continue;
-      x0[std::size_t(gj)] = std::min(static_cast<int>(x), gray.width - 2);
-      ax[std::size_t(gj)] = x - x0[std::size_t(gj)];
-    }
-    for (int gi = 0; gi < kG; ++gi) {
-      float* out = v.data() + std::size_t(gi * kG);
-      const double y = px.y() + patchOffset(gi - 1) * stride;
-      if (!(y >= 0.0 && y <= gray.height - 1)) {
-        std::fill(out, out + kG, std::numeric_limits<float>::quiet_NaN());
-        continue;
-      }
-      const int y0 = std::min(static_cast<int>(y), gray.height - 2);
-      const double ay = y - y0;
-      const std::uint8_t* r0 = gray.data.data() + std::ptrdiff_t(y0) * gray.row_stride;
-      const std::uint8_t* r1 = r0 + gray.row_stride;
-      for (int gj = 0; gj < kG; ++gj) {
-        if (!x_ok[std::size_t(gj)]) {
-          out[gj] = std::numeric_limits<float>::quiet_NaN();
-          continue;
-        }
-        const int a = x0[std::size_t(gj)], b = a + 1;
-        const double w = ax[std::size_t(gj)];
-        out[gj] = static_cast<float>((1 - ay) * ((1 - w) * r0[a] + w * r0[b]) + ay * ((1 - w) * r1[a] + w * r1[b]));
-      }
-    }
+    sampleBilinearGrid(gray, xs, kG, ys, kG, v.data());
   }
 };
 

@@ -41,6 +41,9 @@ inline double patchOffset(int i) { return double(i) - 0.5 * double(PatchPyramid:
 bool extractPatchPyramid(const Image& gray, const Vec2& px, PatchPyramid& out);
 /// Bilinear gray value at `px`; false outside [0, w-1] x [0, h-1].
 bool sampleBilinear(const Image& gray, double x, double y, float& out);
+/// sampleBilinear at every (xs[i], ys[j]) into out[j * nx + i] (NaN outside the image), bit for bit, with
+/// the column and row parts (index, weight, bounds) computed once per line: for patch grids.
+void sampleBilinearGrid(const Image& gray, const double* xs, int nx, const double* ys, int ny, float* out);
 
 /// One stored observation of a visual point.
 struct VisualObservation {
