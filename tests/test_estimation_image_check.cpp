@@ -45,6 +45,29 @@ TEST(ImageCheck, TellsEachFailureFromAGoodImage) {
   EXPECT_EQ(check.check(makeImage(640, 512, 120, 60, pixel_noise, 6)), ImageStatus::Ok) << "new noise: live again";
 }
 
+// Frozen means every visible byte repeated: one changed byte anywhere (a word's or a row tail's) makes
+// the image live; bytes of the row padding beyond the width do not count.
+TEST(ImageCheck, OneChangedByteIsNotFrozenPaddingIsIgnored) {
+  const double pixel_noise = 2.0;
+  Image a = makeImage(203, 50, 120, 60, pixel_noise, 11);  // 203: 25 words and a 3-byte tail per row
+  Image padded;
+  padded.width = a.width, padded.height = a.height, padded.row_stride = a.width + 5;
+  padded.data.assign(std::size_t(padded.row_stride) * std::size_t(padded.height), 7);
+  for (int y = 0; y < a.height; ++y)
+    std::copy_n(a.data.begin() + std::ptrdiff_t(y) * a.row_stride, a.width,
+                padded.data.begin() + std::ptrdiff_t(y) * padded.row_stride);
+  for (const int x : {0, 77, 200, 202}) {  // in a word, and in the tail
+    ImageCheck check(pixel_noise);
+    EXPECT_EQ(check.check(padded), ImageStatus::Ok);
+    Image b = padded;
+    b.data[std::size_t(31 * b.row_stride + x)] ^= 1;
+    EXPECT_EQ(check.check(b), ImageStatus::Ok) << "byte " << x << " of row 31 changed";
+    Image c = b;
+    c.data[std::size_t(12 * c.row_stride + c.width + 2)] ^= 0xff;  // padding only
+    EXPECT_EQ(check.check(c), ImageStatus::Frozen) << "only the padding changed";
+  }
+}
+
 TEST(ImageCheck, ThresholdsFollowThePixelNoise) {
   // A dim image whose signal is 10 gray levels: lit for a 1-level sensor, black for a 5-level one.
   const Image dim = makeImage(320, 240, 10, 2, 1.0, 7);
