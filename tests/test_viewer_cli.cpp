@@ -5,6 +5,7 @@
 // where its sidecar's camera matrix projects it (no estimator involved: an exact oracle).
 // livo-test-bins: livo-viewer
 // livo-test-deps: livo_eval opencv_core opencv_imgcodecs
+#include "viewer_test_util.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/viewer/colour.hpp"
 
@@ -56,18 +57,7 @@ void writeRun(const std::string& dir) {
       << pts.str();
 }
 
-std::vector<double> jsonNumbers(const std::string& json, const std::string& key) {
-  std::vector<double> out;
-  const auto at = json.find("\"" + key + "\": [");
-  if (at == std::string::npos) return out;
-  std::istringstream in(json.substr(json.find('[', at) + 1));
-  for (double v; in >> v;) {
-    out.push_back(v);
-    char sep = 0;
-    if (!(in >> sep) || sep == ']') break;
-  }
-  return out;
-}
+using livo_test::jsonNumbers;
 
 }  // namespace
 

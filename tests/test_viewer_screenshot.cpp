@@ -8,6 +8,7 @@
 // Skipped without root (namespace), Xvfb or lcm-logplayer, which CI provides (CI=true: a skip fails).
 // livo-test-bins: livo-sim livo-preprocess livo-estimator livo-mapserver livo-exporter livo-viewer
 // livo-test-deps: livo_eval opencv_core opencv_imgcodecs
+#include "viewer_test_util.hpp"
 #include "livo/eval/align.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/viewer/colour.hpp"
@@ -34,19 +35,7 @@ namespace {
 constexpr double kScreenshotAtS = 8.0;  // message time after the first pose
 constexpr double kLogS = 10.0;          // simulated seconds
 
-/// The numbers of the JSON array after "key": [ (the viewer's sidecar; no JSON library needed).
-std::vector<double> jsonNumbers(const std::string& json, const std::string& key) {
-  std::vector<double> out;
-  const auto at = json.find("\"" + key + "\": [");
-  if (at == std::string::npos) return out;
-  std::istringstream in(json.substr(json.find('[', at) + 1));
-  for (double v; in >> v;) {
-    out.push_back(v);
-    char sep = 0;
-    if (!(in >> sep) || sep == ']') break;
-  }
-  return out;
-}
+using livo_test::jsonNumbers;
 double jsonNumber(const std::string& json, const std::string& key) {
   const auto at = json.find("\"" + key + "\": ");
   return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 4));
