@@ -39,6 +39,9 @@ struct Child {
   Child(const std::vector<std::string>& argv, const std::string& log_path) {
     pid = ::fork();
     if (pid == 0) {
+      // Its own process group, so that a kill reaches what it started too (roscore's rosmaster and
+      // rosout would otherwise outlive the test).
+      ::setpgid(0, 0);
       const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       if (fd >= 0) {
         ::dup2(fd, 1);
@@ -63,7 +66,7 @@ struct Child {
       }
       sleepS(0.02);
     }
-    ::kill(pid, SIGKILL);
+    killGroup();
     int st = 0;
     ::waitpid(pid, &st, 0);
     pid = -1;
@@ -72,9 +75,15 @@ struct Child {
   void signal(int sig) const {
     if (pid > 0) ::kill(pid, sig);
   }
+  /// SIGKILL to the child and everything in its process group.
+  void killGroup() const {
+    if (pid <= 0) return;
+    ::kill(-pid, SIGKILL);
+    ::kill(pid, SIGKILL);
+  }
   ~Child() {
     if (pid > 0) {
-      ::kill(pid, SIGKILL);
+      killGroup();
       ::waitpid(pid, nullptr, 0);
     }
   }

@@ -122,6 +122,9 @@ struct World {
   int roscores = 0;
   bool ok = false;
 
+  World() = default;
+  World(World&&) = default;
+
   bool startRoscore() {
     roscore = std::make_unique<Child>(std::vector<std::string>{"roscore", "-p", "11311"},
                                       dir + "/roscore" + std::to_string(++roscores) + ".txt");
@@ -130,6 +133,14 @@ struct World {
   void stopRoscore() {
     roscore->signal(SIGINT);
     EXPECT_EQ(roscore->wait(30), 0) << readFile(dir + "/roscore" + std::to_string(roscores) + ".txt");
+  }
+  // At exit: roscore stops its rosmaster and rosout on SIGINT (a kill would orphan them; Child's
+  // destructor kills its whole process group as the last resort).
+  ~World() {
+    if (roscore && roscore->pid > 0) {
+      roscore->signal(SIGINT);
+      roscore->wait(30);
+    }
   }
 };
 
