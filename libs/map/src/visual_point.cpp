@@ -20,7 +20,8 @@ bool sampleBilinear(const Image& gray, double x, double y, float& out) {
 
 void sampleBilinearGrid(const Image& gray, const double* xs, int nx, const double* ys, int ny, float* out) {
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  if (gray.width < 2 || gray.height < 2) {  // degenerate images: the general sampler
+  constexpr int kMaxLine = 64;
+  if (gray.width < 2 || gray.height < 2 || nx > kMaxLine) {  // degenerate images, long lines: the general sampler
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
         float v = 0;
@@ -28,18 +29,9 @@ void sampleBilinearGrid(const Image& gray, const double* xs, int nx, const doubl
       }
     return;
   }
-  constexpr int kMaxLine = 64;
   int x0[kMaxLine];
   double ax[kMaxLine];
   bool x_ok[kMaxLine];
-  if (nx > kMaxLine) {  // long lines: the general sampler
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        float v = 0;
-        out[j * nx + i] = sampleBilinear(gray, xs[i], ys[j], v) ? v : kNaN;
-      }
-    return;
-  }
   for (int i = 0; i < nx; ++i) {
     const double x = xs[i];
     x_ok[i] = x >= 0.0 && x <= gray.width - 1;
