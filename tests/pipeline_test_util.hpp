@@ -40,9 +40,9 @@ struct RunSummary {
 using ImageEdit = std::function<bool(livo::Image&)>;
 
 /// Simulates `sc` (for `duration_s` when > 0) and runs the pipeline on it. visual_mode "off" skips
-/// rendering: one frame per scan.
+/// rendering: one frame per scan. `threads`: PipelineConfig::threads.
 inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, const std::string& visual_mode = "off",
-                              const ImageEdit& edit = {}) {
+                              const ImageEdit& edit = {}, int threads = 1) {
   using namespace livo;
   if (duration_s > 0) sc.duration_s = duration_s;
   sim::Simulator simulator(sc);
@@ -55,6 +55,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
   const bool camera = visual_mode != "off";
   if (!camera) cfg.preprocess.camera_enabled = false;  // LiDAR-inertial: one frame per scan
   cfg.visual_mode = visual_mode;
+  cfg.threads = threads;
   Pipeline pipeline(cfg);
 
   RunSummary out;

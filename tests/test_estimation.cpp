@@ -122,6 +122,56 @@ TEST(LioUpdate, RecoversPerturbedPoseInBoxScene) {
   EXPECT_GT(P.ldlt().vectorD().minCoeff(), 0.0);
 }
 
+// The association runs in fixed blocks on the pool's threads and is summed in block order: the
+// posterior is the same to the bit for every thread count and without a pool.
+TEST(LioUpdate, SamePosteriorToTheBitForEveryThreadCount) {
+  std::mt19937 rng(16);
+  std::normal_distribution<double> noise(0, 0.005);
+  VoxelMap map(VoxelMapConfig{});
+  std::vector<PointWithCov> mpts;
+  for (const auto& p : boxScene(rng, 10000)) {
+    PointWithCov pw;
+    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
+    pw.cov_world = Mat3::Identity() * 2.5e-5;
+    mpts.push_back(pw);
+  }
+  map.insert(mpts);
+  NavState truth;
+  truth.R_world_imu = expSO3(Vec3(0.02, 0.04, -0.3));
+  std::vector<BodyPoint> body;
+  for (const auto& p : boxScene(rng, 1500)) {  // 9000 points: 36 association blocks
+    BodyPoint bp;
+    bp.p_imu = truth.R_world_imu.transpose() * (p - truth.p_world_imu) + Vec3(noise(rng), noise(rng), noise(rng));
+    bp.cov_imu = Mat3::Identity() * 2.5e-5;
+    body.push_back(bp);
+  }
+  NavState x0 = truth;
+  x0.p_world_imu += Vec3(0.04, 0.03, -0.02);
+  x0.R_world_imu = truth.R_world_imu * expSO3(Vec3(0.01, -0.01, 0.015));
+  StateCov P0 = initialCovariance();
+  P0.block<3, 3>(sidx::kRot, sidx::kRot) = Mat3::Identity() * 0.05 * 0.05;
+  P0.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 0.1 * 0.1;
+  LioConfig cfg;
+  cfg.max_iterations = 8;
+  NavState x_ref = x0;
+  StateCov P_ref = P0;
+  const LioUpdateResult r_ref = lidarUpdate(x_ref, P_ref, body, map, cfg);
+  ASSERT_GT(r_ref.matched, 7000);
+  ASSERT_GT(r_ref.iterations, 1);
+  for (int threads : {1, 2, 3, 4}) {
+    WorkerPool pool(threads);
+    NavState x = x0;
+    StateCov P = P0;
+    const LioUpdateResult r = lidarUpdate(x, P, body, map, cfg, &pool);
+    EXPECT_EQ(r.iterations, r_ref.iterations) << threads;
+    EXPECT_EQ(r.matched_index, r_ref.matched_index) << threads;
+    EXPECT_EQ(r.rms_residual_m, r_ref.rms_residual_m) << threads;
+    EXPECT_TRUE(x.p_world_imu == x_ref.p_world_imu) << threads << ": " << (x.p_world_imu - x_ref.p_world_imu).transpose();
+    EXPECT_TRUE(x.R_world_imu == x_ref.R_world_imu) << threads;
+    EXPECT_TRUE(P == P_ref) << threads << ": max |dP| " << (P - P_ref).cwiseAbs().maxCoeff();
+  }
+}
+
 // With a weak prior the iterated update is Gauss-Newton on the point-to-plane cost: compare with a
 // batch Gauss-Newton solution computed independently on the same associations.
 TEST(LioUpdate, MatchesBatchGaussNewtonWithWeakPrior) {

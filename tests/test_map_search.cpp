@@ -227,3 +227,46 @@ TEST(Search, RemoveOutsideBoxAndSingleVoxels) {
     EXPECT_EQ(got.plane, want.plane);
   }
 }
+
+// The LiDAR update keeps each point's candidate planes across its iterations (CachedAssociation):
+// along a walk of small steps (most stay in their voxel, some cross a border or a quarter line that
+// changes the neighbour) its answer is findBestPlane's, plane and numbers, every step.
+TEST(Search, CachedAssociationEqualsFindBestPlaneAlongAWalk) {
+  const Scene sc = makeScene(41);
+  VoxelMap map;
+  map.insert(sc.points);
+  std::mt19937 rng(42);
+  std::normal_distribution<double> step(0.0, 0.02);
+  int steps = 0, matched = 0, cached_hits = 0;
+  for (std::size_t i = 0; i < sc.queries.size(); i += 4) {
+    CachedAssociation cache;
+    PointWithCov q = sc.queries[i];
+    VoxelKey last_key = map.keyOf(q.p_world);
+    for (int k = 0; k < 6; ++k) {
+      VoxelMap::PlaneMatch want, got;
+      const bool ok = map.findBestPlane(q, want);
+      ASSERT_EQ(cache.find(map, q, got), ok) << q.p_world.transpose() << " step " << k;
+      ++steps;
+      cached_hits += k > 0 && map.keyOf(q.p_world) == last_key;
+      last_key = map.keyOf(q.p_world);
+      if (ok) {
+        ++matched;
+        EXPECT_EQ(got.plane, want.plane);
+        EXPECT_EQ(got.distance, want.distance);
+        EXPECT_EQ(got.sigma_l, want.sigma_l);
+        EXPECT_EQ(got.probability, want.probability);
+      }
+      q.p_world += Vec3(step(rng), step(rng), step(rng));
+      q.cov_world *= 0.8;  // gates shrink as in the iterations
+    }
+  }
+  EXPECT_GT(matched, steps / 3);
+  EXPECT_GT(cached_hits, steps / 2) << "most steps stay in their voxel (the cache is used)";
+  EXPECT_LT(cached_hits, steps * 5 / 6) << "some steps leave it (the cache is refreshed)";
+  // Non-finite points: no match, as findBestPlane.
+  CachedAssociation cache;
+  PointWithCov bad = sc.queries[0];
+  bad.p_world.x() = std::nan("");
+  VoxelMap::PlaneMatch m;
+  EXPECT_FALSE(cache.find(map, bad, m));
+}

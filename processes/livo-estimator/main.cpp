@@ -1,5 +1,5 @@
 // livo-estimator --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--visual-mode adaptive|all|off]
-//                [--report-interval S] [--print-config]
+//                [--threads N] [--report-interval S] [--print-config]
 //
 // LIVO_FRAME in; per frame a LIVO_MAP_QUERY to livo-mapserver and its LIVO_SUBMAP back, then
 // LIVO_MAP_UPDATE, LIVO_ODOMETRY, LIVO_REGISTERED_SCAN and LIVO_ESTIMATOR_STATS out (libs/process
@@ -26,9 +26,11 @@ int main(int argc, char** argv) {
   ProcessArgs args;
   std::string visual_mode = "adaptive";
   double report_interval_s = 5.0;
+  int threads = defaultThreadCount();
   addProcessOptions(cl, args);
   cl.choice("--visual-mode", &visual_mode, {"adaptive", "all", "off"},
             "adaptive: keyframes, every frame while LiDAR is degenerate; all: every image; off: LiDAR-inertial");
+  addThreadsOption(cl, &threads);
   cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
       .unit("s");
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
@@ -43,7 +45,8 @@ int main(int argc, char** argv) {
     node_cfg.load(root.section("estimator"));
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "estimator", "lio", "vio", "selector"});
-    pipe_cfg.visual_mode = visual_mode;  // a command-line setting: PipelineConfig has no key for it
+    pipe_cfg.visual_mode = visual_mode;  // command-line settings: PipelineConfig has no keys for them
+    pipe_cfg.threads = threads;
     if (args.print_config) {
       printConfig(std::cout, cl.program(), file, "--visual-mode " + visual_mode);
       return kExitOk;

@@ -1,5 +1,5 @@
 // livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off] [--map-mode hybrid|global]
-//          [--max-frames N] [--no-maps] [--progress] [--quiet] [--print-config]
+//          [--threads N] [--max-frames N] [--no-maps] [--progress] [--quiet] [--print-config]
 //
 // Runs the whole pipeline in one process (no network) on an LCM log, as fast as possible:
 // log events -> validated structs -> frame builder (recut sweeps + IMU + image) -> odometry -> outputs.
@@ -31,6 +31,7 @@ void addOptions(CommandLine& cl, livo_run::Args& a) {
             "off: LiDAR-inertial only");
   cl.choice("--map-mode", &a.map_mode, {"hybrid", "global"},
             "hybrid: sliding local map + long-term visual map; global: one unbounded map (FAST-LIVO2)");
+  addThreadsOption(cl, &a.threads);
   cl.count("--max-frames", &a.max_frames, "N", "stop after N frames").defaultText("all");
   cl.flag("--no-maps", &a.no_maps,
           "skip map.pcd / map.bt (their point store and ray casting cost time and memory of their own: "
@@ -51,6 +52,7 @@ ConfigFile loadConfig(const livo_run::Args& args, livo_run::Config& cfg) {
   file.checkAllKeysUsed();
   cfg.pipe.visual_mode = args.visual_mode;  // command-line settings: PipelineConfig has no keys for them
   cfg.pipe.map_mode = args.map_mode;
+  cfg.pipe.threads = args.threads;
   return file;
 }
 

@@ -242,6 +242,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   counters["images_missing"] = double(ic.missing);
   const double rss = bytesToMb(peakRssBytes());
   std::map<std::string, std::string> notes{{"visual_mode", args.visual_mode}, {"map_mode", args.map_mode},
+                                           {"threads", std::to_string(args.threads)},
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
   outputs.writeStats(ms, rss, counters, notes);

@@ -2,6 +2,7 @@
 // configuration).
 #pragma once
 
+#include "livo/common/worker_pool.hpp"
 #include "livo/estimation/pipeline.hpp"
 #include "livo/io/channels.hpp"
 #include "livo/process/map_export.hpp"
@@ -16,6 +17,7 @@ struct Args {
   std::string log, config, out;
   std::string visual_mode = "adaptive";
   std::string map_mode = "hybrid";
+  int threads = livo::defaultThreadCount();  ///< threads of the per-frame loops (same results for every count)
   bool quiet = false;
   bool progress = false;  ///< the progress line also when stderr is not a terminal
   bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)

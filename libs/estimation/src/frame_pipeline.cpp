@@ -33,6 +33,7 @@ FramePipeline::FramePipeline(PipelineConfig cfg)
       selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)),
       image_check_(cfg_.vio.pixel_noise) {
   if (cfg_.camera.enabled) camera_ = CameraModel::create(cfg_.camera);
+  if (cfg_.threads != 1) pool_ = std::make_unique<WorkerPool>(cfg_.threads);  // throws naming a bad count
 }
 
 FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
@@ -94,7 +95,7 @@ const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, Frame
 }
 
 void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {
-  lio_.update(r.lio, planes);
+  lio_.update(r.lio, planes, pool_.get());
   r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
   // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
   // alone put it. Except where the map holds nothing around the scan (the first scan, new
@@ -131,7 +132,7 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   NavState x = r.lio.state;
   StateCov P = r.lio.P;
   const VisualStepResult vs = runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio,
-                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr);
+                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get());
   if (vs.update.points_used > 0) lio_.setState(x, P);
   selector_.markUsed(x);
   r.visual_used = true;

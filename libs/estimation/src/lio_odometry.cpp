@@ -166,12 +166,12 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   return true;
 }
 
-void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes) {
+void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool) {
   // 3. Iterated point-to-plane update against the map (skipped until the map has content).
   if (map_started_ && !r.points.empty()) {
     NavState x = x_;
     StateCov P = P_;
-    const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio);
+    const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio, pool);
     r.n_matched = u.matched;
     r.iterations = u.iterations;
     r.rms_residual_m = u.rms_residual_m;

@@ -38,10 +38,77 @@ Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint&
          P.block<3, 3>(sidx::kPos, sidx::kPos);
 }
 
+namespace {
+
+using Mat66 = Eigen::Matrix<double, 6, 6>;
+using Vec66 = Eigen::Matrix<double, 6, 1>;
+
+/// Points per block of the association loop: fixed, so that the partial sums (and hence the update)
+/// are the same for every thread count.
+constexpr std::size_t kAssociationBlock = 256;
+
+/// The parts of worldPointCovariance that are the same for every point of one iteration: with
+/// q = R p, R [p]x = [q]x R, so R [p]x P_thth [p]x^T R^T = [q]x S [q]x^T with S = R P_thth R^T.
+struct PoseCovariance {
+  Mat3 R;
+  Mat3 S;     ///< R P_thth R^T
+  Mat3 P_pp;
+  PoseCovariance(const NavState& x, const StateCov& P)
+      : R(x.R_world_imu),
+        S(x.R_world_imu * P.block<3, 3>(sidx::kRot, sidx::kRot) * x.R_world_imu.transpose()),
+        P_pp(P.block<3, 3>(sidx::kPos, sidx::kPos)) {}
+  /// worldPointCovariance for body point `bp` whose rotated position R p is `q`.
+  Mat3 of(const BodyPoint& bp, const Vec3& q) const {
+    const Mat3 Q = hat(q);
+    return R * bp.cov_imu * R.transpose() + Q * S * Q.transpose() + P_pp;
+  }
+};
+
+/// One point's association at the current estimate.
+struct PointMatch {
+  bool matched = false;
+  Vec3 normal = Vec3::Zero();
+};
+
+/// One block's share of the normal equations.
+struct BlockSums {
+  Mat66 HtRH = Mat66::Zero();
+  Vec66 HtRz = Vec66::Zero();
+  double sq = 0.0;
+};
+
+/// Step 1 and 2 for points [begin, end): associate each with its most probable plane at `x` and add
+/// its residual row (plane uncertainty + the point's own noise, not the state's) to `sums`.
+void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector<BodyPoint>& points,
+                    const std::vector<Mat3>& cov_meas_world, const PlaneFinder& map, const LioConfig& cfg,
+                    std::size_t begin, std::size_t end, std::vector<CachedAssociation>& assoc,
+                    std::vector<PointMatch>& matches, BlockSums& sums) {
+  sums = BlockSums{};
+  const PoseCovariance pose_cov(x, P_gate);
+  for (std::size_t i = begin; i < end; ++i) {
+    PointMatch& pm = matches[i];
+    pm.matched = false;
+    PointWithCov pw;
+    const Vec3 q = x.R_world_imu * points[i].p_imu;
+    pw.p_world = q + x.p_world_imu;
+    pw.cov_world = pose_cov.of(points[i], q);
+    PlaneMatch m;
+    if (!assoc[i].find(map, pw, m)) continue;
+    const Plane& pl = *m.plane;
+    const PlaneResidual r = planeResidual(x, points[i].p_imu, pl.normal, pl.d);
+    const double var = pointToPlaneVariance(pl, pw.p_world, cov_meas_world[i]) + cfg.residual_floor_var;
+    sums.HtRH.noalias() += r.h * r.h.transpose() / var;
+    sums.HtRz += r.h * r.residual / var;
+    sums.sq += r.residual * r.residual;
+    pm.matched = true;
+    pm.normal = pl.normal;
+  }
+}
+
+}  // namespace
+
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
-                            const LioConfig& cfg) {
-  using Mat66 = Eigen::Matrix<double, 6, 6>;
-  using Vec66 = Eigen::Matrix<double, 6, 1>;
+                            const LioConfig& cfg, WorkerPool* pool) {
   LioUpdateResult res;
   const NavState x_prop = x;
   const StateCov P_prop = P;
@@ -50,38 +117,42 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
 
   // The point's own noise in the world frame (residual weights), evaluated at the prior.
   std::vector<Mat3> cov_meas_world(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    cov_meas_world[i] = x_prop.R_world_imu * points[i].cov_imu * x_prop.R_world_imu.transpose();
+  forRange(pool, points.size(), kAssociationBlock, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      cov_meas_world[i] = x_prop.R_world_imu * points[i].cov_imu * x_prop.R_world_imu.transpose();
+  });
 
+  std::vector<PointMatch> matches(points.size());
+  // Each point's candidate planes, kept while it stays in its voxel (the map does not change here).
+  std::vector<CachedAssociation> assoc(points.size());
+  std::vector<BlockSums> blocks((points.size() + kAssociationBlock - 1) / kAssociationBlock);
   StateCov K_bar = StateCov::Zero();
-  Mat66 HtRH = Mat66::Zero();
   int converged_count = 0;
   for (int it = 0; it < cfg.max_iterations; ++it) {
-    // 1. Associate every point with its most probable plane at the current estimate.
-    HtRH.setZero();
+    // 1. Associate every point with its most probable plane at the current estimate (blocks in
+    //    parallel, summed in block order). Association gates widen with the pose uncertainty: the
+    //    prior's in the first iteration, then the current posterior's (K_bar), so that gates shrink as
+    //    the estimate settles.
+    const StateCov& P_gate = it == 0 ? P_prop : K_bar;
+    forRange(pool, points.size(), kAssociationBlock, [&](std::size_t begin, std::size_t end) {
+      associateBlock(x, P_gate, points, cov_meas_world, map, cfg, begin, end, assoc, matches,
+                     blocks[begin / kAssociationBlock]);
+    });
+    Mat66 HtRH = Mat66::Zero();
     Vec66 HtRz = Vec66::Zero();
+    double sq = 0;
+    for (const BlockSums& b : blocks) {
+      HtRH += b.HtRH;
+      HtRz += b.HtRz;
+      sq += b.sq;
+    }
     res.matched_normals.clear();
     res.matched_index.clear();
-    double sq = 0;
-    // Association gates widen with the pose uncertainty: the prior's in the first iteration, then the
-    // current posterior's (K_bar), so that gates shrink as the estimate settles.
-    const StateCov& P_gate = it == 0 ? P_prop : K_bar;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      PointWithCov pw;
-      pw.p_world = x.R_world_imu * points[i].p_imu + x.p_world_imu;
-      pw.cov_world = worldPointCovariance(x, P_gate, points[i]);
-      VoxelMap::PlaneMatch m;
-      if (!map.findBestPlane(pw, m)) continue;
-      const Plane& pl = *m.plane;
-      // 2. Residual, Jacobian and variance: plane uncertainty + the point's own noise (not the state's).
-      const PlaneResidual r = planeResidual(x, points[i].p_imu, pl.normal, pl.d);
-      const double var = pointToPlaneVariance(pl, pw.p_world, cov_meas_world[i]) + cfg.residual_floor_var;
-      HtRH += r.h * r.h.transpose() / var;
-      HtRz += r.h * r.residual / var;
-      res.matched_normals.push_back(pl.normal);
-      res.matched_index.push_back(static_cast<int>(i));
-      sq += r.residual * r.residual;
-    }
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if (matches[i].matched) {
+        res.matched_normals.push_back(matches[i].normal);
+        res.matched_index.push_back(static_cast<int>(i));
+      }
     res.matched = static_cast<int>(res.matched_normals.size());
     res.iterations = it + 1;
     if (res.matched == 0) {

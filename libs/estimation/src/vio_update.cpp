@@ -234,11 +234,17 @@ PatchMoments patchMoments(const NavState& x, const CurrentGrid& grid, const Poin
   return m;
 }
 
-Linearization linearize(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
-                        const std::vector<PointState>& pts, int level, double inv_var, bool exposure) {
-  Linearization lin;
+/// Points per block of the per-point loops: fixed, so that partial sums (and the update) are the same
+/// for every thread count.
+constexpr std::size_t kPointBlock = 8;
+
+/// Adds points [begin, end) of `pts` to `lin`.
+void linearizeBlock(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
+                    const std::vector<PointState>& pts, std::size_t begin, std::size_t end, int level, double inv_var,
+                    bool exposure, Linearization& lin) {
   CurrentGrid grid;
-  for (const auto& ps : pts) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const PointState& ps = pts[i];
     if (!ps.used) continue;
     PointProjection pp;
     if (!projectForPatch(x, T_ic, cam, ps.point->p_world, true, pp)) continue;
@@ -259,6 +265,24 @@ Linearization linearize(const NavState& x, const Image& gray, const CameraModel&
     lin.cost += m.rr;
     lin.n += m.n;
   }
+}
+
+/// Normal equations of every used point at level `level`: blocks of points in parallel on `pool`,
+/// summed in block order.
+Linearization linearize(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
+                        const std::vector<PointState>& pts, int level, double inv_var, bool exposure,
+                        WorkerPool* pool) {
+  std::vector<Linearization> blocks((pts.size() + kPointBlock - 1) / kPointBlock);
+  forRange(pool, pts.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
+    linearizeBlock(x, gray, cam, T_ic, pts, begin, end, level, inv_var, exposure, blocks[begin / kPointBlock]);
+  });
+  Linearization lin;
+  for (const Linearization& b : blocks) {
+    lin.HtRH += b.HtRH;
+    lin.HtRz += b.HtRz;
+    lin.cost += b.cost;
+    lin.n += b.n;
+  }
   return lin;
 }
 
@@ -266,25 +290,28 @@ Linearization linearize(const NavState& x, const Image& gray, const CameraModel&
 /// Returns the squared RMS summed over the points used.
 double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
                   const std::vector<VisualPoint*>& points, const VioConfig& cfg, std::vector<PointState>& pts,
-                  VioUpdateResult& res) {
+                  VioUpdateResult& res, WorkerPool* pool) {
   const Pose T_world_camera = x.pose() * T_imu_camera;
   pts.assign(points.size(), PointState{});
+  std::vector<double> rms(points.size(), -1.0);
+  forRange(pool, points.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      PointState& ps = pts[i];
+      ps.point = points[i];
+      ps.ref = points[i] ? points[i]->referenceObs() : nullptr;
+      if (!ps.ref) continue;
+      if (cfg.normal_warp) ps.A = warpRefFromCur(*ps.point, *ps.ref, T_world_camera, cam);
+      precomputeReference(ps);
+      rms[i] = pointRms(x, gray, cam, T_imu_camera, ps, 0);
+      ps.used = rms[i] >= 0 && rms[i] <= cfg.outlier_rms;
+    }
+  });
   double sq = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    PointState& ps = pts[i];
-    ps.point = points[i];
-    ps.ref = points[i] ? points[i]->referenceObs() : nullptr;
-    if (!ps.ref) {
-      ++res.points_rejected;
-      continue;
-    }
-    if (cfg.normal_warp) ps.A = warpRefFromCur(*ps.point, *ps.ref, T_world_camera, cam);
-    precomputeReference(ps);
-    const double rms = pointRms(x, gray, cam, T_imu_camera, ps, 0);
-    ps.used = rms >= 0 && rms <= cfg.outlier_rms;
+    const PointState& ps = pts[i];
     if (ps.used) {
       ++res.points_used;
-      sq += rms * rms;
+      sq += rms[i] * rms[i];
     } else {
       ++res.points_rejected;
     }
@@ -298,7 +325,7 @@ double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, 
 /// posterior covariance of the last linearisation.
 bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const CameraModel& cam,
                    const Pose& T_imu_camera, const std::vector<PointState>& pts, const VioConfig& cfg,
-                   StateCov& K_bar, VioUpdateResult& res) {
+                   StateCov& K_bar, VioUpdateResult& res, WorkerPool* pool) {
   const NavState x_prop = x;
   const double inv_var = 1.0 / cfg.residualVariance();
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
@@ -308,7 +335,7 @@ bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const
     NavState x_prev = x;
     double prev_mse = std::numeric_limits<double>::infinity();
     for (int it = 0; it < cfg.max_iterations; ++it) {
-      const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, cfg.estimate_exposure);
+      const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, cfg.estimate_exposure, pool);
       if (lin.n == 0) break;
       const double mse = lin.cost / double(lin.n);
       if (mse > prev_mse) {  // the last step made things worse: undo it and end this level
@@ -337,16 +364,19 @@ bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const
 
 /// Step 4. Per-point errors and pixels at the posterior (the visual map drops points that stay bad).
 void posteriorErrors(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
-                     const std::vector<PointState>& pts, VioUpdateResult& res) {
+                     const std::vector<PointState>& pts, VioUpdateResult& res, WorkerPool* pool) {
+  const Pose T_cw_post = (x.pose() * T_imu_camera).inverse();
+  forRange(pool, pts.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      if (!pts[i].ref) continue;
+      cam.project(T_cw_post * pts[i].point->p_world, res.point_px[i]);
+      if (pts[i].used) res.point_rms[i] = pointRms(x, gray, cam, T_imu_camera, pts[i], 0);
+    }
+  });
   double sq_after = 0;
   int n_after = 0;
-  const Pose T_wc_post = x.pose() * T_imu_camera;
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    if (!pts[i].ref) continue;
-    cam.project(T_wc_post.inverse() * pts[i].point->p_world, res.point_px[i]);
-    if (!pts[i].used) continue;
-    res.point_rms[i] = pointRms(x, gray, cam, T_imu_camera, pts[i], 0);
-    if (res.point_rms[i] >= 0) {
+    if (pts[i].used && res.point_rms[i] >= 0) {
       sq_after += res.point_rms[i] * res.point_rms[i];
       ++n_after;
     }
@@ -371,7 +401,7 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
     precomputeReference(ps);
     pts.push_back(ps);
   }
-  const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, exposure);
+  const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, exposure, nullptr);
   PhotometricNormalEquations out;
   out.HtRH = lin.HtRH;
   out.HtRz = lin.HtRz;
@@ -381,21 +411,22 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
 }
 
 VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
-                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg) {
+                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg,
+                             WorkerPool* pool) {
   VioUpdateResult res;
   res.point_rms.assign(points.size(), -1.0);
   res.point_px.assign(points.size(), Vec2::Zero());
   // 1. Warps and the outlier gate at the prior.
   std::vector<PointState> pts;
-  const double sq_before = gatePoints(x, gray, cam, T_imu_camera, points, cfg, pts, res);
+  const double sq_before = gatePoints(x, gray, cam, T_imu_camera, points, cfg, pts, res, pool);
   if (res.points_used == 0) return res;
   res.rms_before = std::sqrt(sq_before / res.points_used);
   // 2. Iterated updates, coarse to fine.
   StateCov K_bar = P;
   // 3. Covariance once, from the last linearisation: P = (I - K_bar H^T R^-1 H) P_prop = K_bar.
-  if (iterateLevels(x, P, gray, cam, T_imu_camera, pts, cfg, K_bar, res)) P = 0.5 * (K_bar + K_bar.transpose());
+  if (iterateLevels(x, P, gray, cam, T_imu_camera, pts, cfg, K_bar, res, pool)) P = 0.5 * (K_bar + K_bar.transpose());
   // 4. Per-point errors at the posterior.
-  posteriorErrors(x, gray, cam, T_imu_camera, pts, res);
+  posteriorErrors(x, gray, cam, T_imu_camera, pts, res, pool);
   return res;
 }
 

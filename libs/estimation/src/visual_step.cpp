@@ -13,7 +13,7 @@ std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& p
 
 VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                                const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio,
-                               const NoScanRetrieval* no_scan) {
+                               const NoScanRetrieval* no_scan, WorkerPool* pool) {
   VisualStepResult r;
   // Retrieval: visual points in the voxels of the current scan (or of the camera frustum when the
   // LiDAR failed), one per grid cell, not occluded.
@@ -21,7 +21,7 @@ VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, cons
                               no_scan ? &no_scan->frustum_keys : nullptr);
 
   // Photometric update, sequential after the LiDAR one at the same time stamp.
-  if (!r.points.empty()) r.update = visualUpdate(x, P, gray, cam, T_imu_camera, r.points, vio);
+  if (!r.points.empty()) r.update = visualUpdate(x, P, gray, cam, T_imu_camera, r.points, vio, pool);
   const VioUpdateResult& vu = r.update;
 
   // Visual map at the posterior: errors, new observations, references/normals, new points.

@@ -89,6 +89,58 @@ bool PlaneIndex::searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneM
   return found;
 }
 
+void PlaneIndex::visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const {
+  const auto it = voxels_.find(key);
+  if (it == voxels_.end()) return;
+  for (const Plane& plane : it->second) f(plane);
+}
+
+void CachedAssociation::Candidates::fetch(const PlaneFinder& finder, const VoxelKey& key) {
+  n = 0;
+  finder.visitPlanes(key, [&](const Plane& plane) {
+    if (n < kMaxCached) planes[std::size_t(n)] = &plane;
+    n = std::min(n + 1, kMaxCached + 1);
+  });
+}
+
+bool CachedAssociation::Candidates::best(const PlaneFinder& finder, const VoxelKey& key, const PointWithCov& pw,
+                                         PlaneMatch& out) const {
+  bool found = false;
+  const double sigma_num = finder.sigmaNum();
+  if (n > kMaxCached) {
+    finder.visitPlanes(key, [&](const Plane& plane) {
+      if (scorePlaneCandidate(plane, pw, sigma_num, found, out)) found = true;
+    });
+    return found;
+  }
+  for (int i = 0; i < n; ++i)
+    if (scorePlaneCandidate(*planes[std::size_t(i)], pw, sigma_num, found, out)) found = true;
+  return found;
+}
+
+bool CachedAssociation::find(const PlaneFinder& finder, const PointWithCov& pw, PlaneMatch& out) {
+  out = PlaneMatch{};
+  const double s = finder.rootVoxelSize();
+  if (!keyablePoint(pw.p_world, s)) return false;
+  const VoxelKey own = VoxelKey::fromPoint(pw.p_world, s);
+  if (own_.n < 0 || !(own == own_key_)) {
+    own_key_ = own;
+    own_.fetch(finder, own);
+    near_.n = -1;  // the neighbour depends on the voxel
+  }
+  if (own_.best(finder, own_key_, pw, out)) return true;
+  out = PlaneMatch{};
+  VoxelKey near;
+  const bool has_near = neighbourVoxelKey(pw.p_world, s, near);
+  if (!has_near) return false;
+  if (near_.n < 0 || !has_near_ || !(near == near_key_)) {
+    near_key_ = near;
+    near_.fetch(finder, near);
+  }
+  has_near_ = true;
+  return near_.best(finder, near_key_, pw, out);
+}
+
 bool PlaneIndex::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
   out = PlaneMatch{};
   if (!keyablePoint(pw.p_world, voxel_size_)) return false;

@@ -73,6 +73,11 @@ bool VoxelMap::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
   return searchVoxel(near, pw, out);
 }
 
+void VoxelMap::visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const {
+  const auto it = roots_.find(key);
+  if (it != roots_.end()) it->second->forEachPlane(f);
+}
+
 void VoxelMap::forEachPlaneIn(
     const VoxelKey& key, const std::function<void(const Plane&, const std::array<std::int8_t, 3>&)>& f) const {
   const auto it = roots_.find(key);

@@ -1,6 +1,9 @@
 #include "livo/process/cli.hpp"
 
+#include "livo/common/worker_pool.hpp"
 #include "livo/io/channels.hpp"
+
+#include <string>
 
 namespace livo {
 
@@ -15,6 +18,14 @@ void addProcessOptions(CommandLine& cl, ProcessArgs& args) {
             "exit as on SIGINT after S seconds without any message (0: never; for tests and batch runs)", 0.0)
       .unit("s");
   cl.flag("--print-config", &args.print_config, kPrintConfigHelp);
+}
+
+void addThreadsOption(CommandLine& cl, int* threads) {
+  cl.integer("--threads", threads, "N",
+             "threads of the per-frame loops (LiDAR association, photometric patches); the results are the same "
+             "for every N",
+             1, WorkerPool::kMaxThreads)
+      .defaultText("the machine's cores, at most 4 (here " + std::to_string(defaultThreadCount()) + ")");
 }
 
 void checkSectionsUsed(const ConfigFile& file, const std::vector<std::string>& sections) {

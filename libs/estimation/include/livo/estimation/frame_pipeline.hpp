@@ -14,6 +14,7 @@
 // step runs) is taken here and nowhere else.
 #pragma once
 
+#include "livo/common/worker_pool.hpp"
 #include "livo/estimation/frame_result.hpp"
 #include "livo/estimation/frame_selector.hpp"
 #include "livo/estimation/image_check.hpp"
@@ -29,7 +30,7 @@ namespace livo {
 
 class FramePipeline {
  public:
-  /// Throws std::invalid_argument naming a bad visual_mode.
+  /// Throws std::invalid_argument naming a bad visual_mode or thread count.
   explicit FramePipeline(PipelineConfig cfg);
 
   /// Runs steps 1-7 on one frame (time order) against `map`.
@@ -59,6 +60,7 @@ class FramePipeline {
   LioOdometry lio_;
   FrameSelector selector_;
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
+  std::unique_ptr<WorkerPool> pool_;     ///< null with one thread
   ImageCheck image_check_;
   ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;

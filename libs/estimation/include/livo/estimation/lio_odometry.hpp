@@ -64,8 +64,8 @@ class LioOdometry {
   /// yet, frame inside the initialisation window).
   bool predict(const Frame& frame, LioFrameResult& r);
   /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
-  /// r.P, r.lio_ms (since predict()) and the match results.
-  void update(LioFrameResult& r, const PlaneFinder& planes);
+  /// r.P, r.lio_ms (since predict()) and the match results. `pool`: threads of the association.
+  void update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool = nullptr);
   /// World points with covariance at the current posterior (what step 3 inserts into the map).
   std::vector<PointWithCov> worldPoints(const std::vector<BodyPoint>& pts) const;
   /// Records that the frame's points went into the map (enables update() from the next frame on).

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/worker_pool.hpp"
 #include "livo/estimation/state.hpp"
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/voxel_map.hpp"
@@ -57,10 +58,13 @@ PlaneResidual planeResidual(const NavState& x, const Vec3& p_imu, const Vec3& no
 Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp);
 
 /// Iterated update: re-associates every point with the map in every iteration (information form,
+/// the candidate planes of a point kept while it stays in its voxel: CachedAssociation,
 /// ALGORITHMS.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the
-/// posterior on return. With no match at all the state is left unchanged.
+/// posterior on return. With no match at all the state is left unchanged. With `pool`, the
+/// association runs on its threads in fixed blocks summed in block order: the result is the same for
+/// every thread count, and the same as without a pool.
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
-                            const LioConfig& cfg);
+                            const LioConfig& cfg, WorkerPool* pool = nullptr);
 
 /// Degeneracy metric (ALGORITHMS.md, top and section 9): with M = sum n n^T over the N matched unit
 /// normals (trace N) and lambda_min its smallest eigenvalue, sigma_min = sqrt(lambda_min / N), in

@@ -24,6 +24,9 @@ struct PipelineConfig {
   HybridMapConfig map;  ///< section `map`; its mode comes from map_mode
   std::string visual_mode = "adaptive";  ///< adaptive | all | off (command line)
   std::string map_mode = "hybrid";       ///< hybrid | global (command line; overrides map.mode)
+  /// Threads of the per-frame loops (command line `--threads`; 1: none started). Results are the same
+  /// for every count (worker_pool.hpp).
+  int threads = 1;
 
   /// Reads every section a rig config may hold that the pipeline uses (not channels).
   void load(const ConfigNode& root);

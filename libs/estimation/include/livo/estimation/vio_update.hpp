@@ -5,6 +5,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/worker_pool.hpp"
 #include "livo/estimation/state.hpp"
 #include "livo/map/visual_point.hpp"
 #include "livo/sensors/camera_model.hpp"
@@ -70,8 +71,11 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
 Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& ref, const Pose& T_world_camera,
                                const CameraModel& cam);
 
-/// Runs the update. `points` come from the visual map's retrieval (each with a reference).
+/// Runs the update. `points` come from the visual map's retrieval (each with a reference). With
+/// `pool`, the per-point work (warps, gates, patch sums) runs on its threads in fixed blocks summed in
+/// block order: the result is the same for every thread count, and the same as without a pool.
 VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
-                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg);
+                             const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg,
+                             WorkerPool* pool = nullptr);
 
 }  // namespace livo

@@ -12,7 +12,9 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/map/voxel_key.hpp"
 
+#include <array>
 #include <cstddef>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -30,6 +32,40 @@ class PlaneFinder {
   virtual ~PlaneFinder() = default;
   /// Most probable plane for a query point; false when no plane passes the gates.
   virtual bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const = 0;
+
+  // What findBestPlane is made of, for callers that keep a point's candidates across iterations
+  // (CachedAssociation): findBestPlane(pw) equals scoring the planes of the point's root voxel
+  // and, when none is accepted, those of its one neighbour (neighbourVoxelKey), in this order.
+  /// Edge of the root voxels, m.
+  virtual double rootVoxelSize() const = 0;
+  /// Gate width of scorePlaneCandidate, sigmas.
+  virtual double sigmaNum() const = 0;
+  /// Calls f(plane) for every plane of root voxel `key`, in findBestPlane's order (nothing when the
+  /// voxel does not exist). Plane addresses stay valid until the map changes.
+  virtual void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const = 0;
+};
+
+/// One point's association across the iterations of an update against a map that does not change
+/// meanwhile: find() gives exactly PlaneFinder::findBestPlane's answer, but keeps the candidate
+/// planes of the point's root voxel (and of its neighbour, once needed) while the point stays in the
+/// same voxel with the same neighbour, so that later iterations only re-score them (no hash lookup,
+/// no octree walk). A voxel with more than kMaxCached planes is searched afresh every time.
+class CachedAssociation {
+ public:
+  static constexpr int kMaxCached = 8;
+  bool find(const PlaneFinder& finder, const PointWithCov& pw, PlaneMatch& out);
+
+ private:
+  struct Candidates {
+    std::array<const Plane*, kMaxCached> planes;  // the first n are set
+    int n = -1;  ///< -1: not fetched; kMaxCached + 1: too many (search afresh)
+    void fetch(const PlaneFinder& finder, const VoxelKey& key);
+    /// Scores the candidates (or, when too many, the voxel afresh) into `out`; true when one passed.
+    bool best(const PlaneFinder& finder, const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const;
+  };
+  VoxelKey own_key_, near_key_;
+  bool has_near_ = false;
+  Candidates own_, near_;
 };
 
 /// Scores one candidate plane for `pw`: accepted when the in-plane distance
@@ -57,6 +93,9 @@ class PlaneIndex : public PlaneFinder {
   /// Replaces the voxel size (keys of later add() calls must use it); clears the index.
   void reset(double voxel_size_m);
   bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const override;
+  double rootVoxelSize() const override { return voxel_size_; }
+  double sigmaNum() const override { return sigma_num_; }
+  void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const override;
   std::size_t numPlanes() const { return planes_; }
   std::size_t numVoxels() const { return voxels_.size(); }
   double voxelSize() const { return voxel_size_; }

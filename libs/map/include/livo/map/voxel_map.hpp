@@ -60,6 +60,9 @@ class VoxelMap : public PlaneFinder {
   /// neighbour root voxel is tried: step +1 along each axis where the point lies in the upper
   /// quarter of its voxel ((p/s - floor(p/s)) > 0.75), -1 where it lies in the lower quarter (< 0.25).
   bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const override;
+  double rootVoxelSize() const override { return config_.voxel_size_m; }
+  double sigmaNum() const override { return config_.sigma_num; }
+  void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const override;
 
   /// The neighbour key findBestPlane tries for `p`; false when p is in no outer quarter.
   bool neighbourKey(const Vec3& p, VoxelKey& out) const;

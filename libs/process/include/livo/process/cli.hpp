@@ -23,6 +23,10 @@ struct ProcessArgs {
 /// Adds --config (required), --lcm-url, --idle-exit and --print-config to `cl`.
 void addProcessOptions(CommandLine& cl, ProcessArgs& args);
 
+/// Adds --threads N (1..WorkerPool::kMaxThreads; default defaultThreadCount()) for the per-frame loops
+/// of livo-run and livo-estimator.
+void addThreadsOption(CommandLine& cl, int* threads);
+
 /// Help text of --print-config (livo-run's too).
 extern const char* const kPrintConfigHelp;
 
