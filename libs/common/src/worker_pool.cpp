@@ -1,10 +1,27 @@
 #include "livo/common/worker_pool.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <stdexcept>
 #include <string>
 
 namespace livo {
+
+namespace {
+
+/// Polls `done` (yielding the core between polls) for up to WorkerPool::kSpinMicros; true when it
+/// became true meanwhile.
+template <class F>
+bool pollFor(F&& done) {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(WorkerPool::kSpinMicros);
+  for (int i = 0;; ++i) {
+    if (done()) return true;
+    if ((i & 15) == 15 && std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::yield();
+  }
+}
+
+}  // namespace
 
 int defaultThreadCount() {
   const unsigned hw = std::thread::hardware_concurrency();  // 0 when unknown
@@ -45,22 +62,26 @@ void WorkerPool::runBlocks() {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   finished_ += done;
+  outstanding_.fetch_sub(done, std::memory_order_release);
 }
 
 void WorkerPool::workerLoop() {
   std::size_t seen = 0;
   for (;;) {
+    pollFor([&] { return generation_seen_.load(std::memory_order_acquire) != seen; });
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [&] { return stop_ || (task_ != nullptr && generation_ != seen); });
       if (stop_) return;
       seen = generation_;
       ++active_;
+      outstanding_.fetch_add(1, std::memory_order_relaxed);
     }
     runBlocks();
     {
       std::lock_guard<std::mutex> lock(mutex_);
       --active_;
+      outstanding_.fetch_sub(1, std::memory_order_release);
     }
     done_.notify_one();
   }
@@ -87,10 +108,13 @@ void WorkerPool::forBlocks(std::size_t blocks, const std::function<void(std::siz
     next_.store(0, std::memory_order_relaxed);
     finished_ = 0;
     error_ = nullptr;
+    outstanding_.store(blocks, std::memory_order_relaxed);
     ++generation_;
+    generation_seen_.store(generation_, std::memory_order_release);
   }
   wake_.notify_all();
   runBlocks();
+  pollFor([&] { return outstanding_.load(std::memory_order_acquire) == 0; });
   std::exception_ptr error;
   {
     std::unique_lock<std::mutex> lock(mutex_);

@@ -6,6 +6,11 @@
 // Then a run with 1 thread and a run with 4 give bit-identical sums. Blocks are handed out in order
 // to whichever thread is free (an atomic counter), so a slow thread does not hold the others back.
 //
+// The per-frame loops call the pool every few hundred microseconds with blocks of tens of
+// microseconds, shorter than a sleeping thread takes to wake: so a worker that finished a call, and
+// the caller waiting for the last blocks, first poll (yielding the core to any other runnable thread)
+// for up to kSpinMicros before they sleep on a condition variable, as OpenMP runtimes do.
+//
 // forBlocks() is not reentrant: a block must not call forBlocks() on the same pool. One caller at a
 // time (the pipeline's thread); the pool is neither copyable nor movable.
 #pragma once
@@ -28,6 +33,7 @@ int defaultThreadCount();
 class WorkerPool {
  public:
   static constexpr int kMaxThreads = 64;
+  static constexpr int kSpinMicros = 300;
   /// `threads` in 1..kMaxThreads (1: everything runs on the caller's thread, no worker is started);
   /// throws std::invalid_argument otherwise.
   explicit WorkerPool(int threads);
@@ -56,6 +62,8 @@ class WorkerPool {
   std::condition_variable wake_;  ///< workers wait for a new generation
   std::condition_variable done_;  ///< the caller waits for the last block
   std::size_t generation_ = 0;
+  std::atomic<std::size_t> generation_seen_{0};  ///< generation_, readable without the lock (polling)
+  std::atomic<std::size_t> outstanding_{0};      ///< blocks not finished + workers inside (polling)
   bool stop_ = false;
   const std::function<void(std::size_t)>* task_ = nullptr;
   std::size_t blocks_ = 0;
