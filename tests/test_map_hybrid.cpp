@@ -178,6 +178,35 @@ TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
   });
 }
 
+// map.longterm_enabled false: the same slides and LiDAR map, but every visual point that leaves the
+// local cube is deleted, the long-term map stays empty and nothing comes back on a revisit.
+TEST(HybridMap, WithoutLongtermMapLeavingPointsAreDeleted) {
+  HybridMapConfig off_cfg = smallConfig();
+  off_cfg.longterm_enabled = false;
+  HybridMap with(smallConfig(), voxels1m(), VisualMapConfig{});
+  HybridMap without(off_cfg, voxels1m(), VisualMapConfig{});
+  const Scene sc = fillScene(with, 7);
+  fillScene(without, 7);
+  const std::size_t total = with.visual().local().size();
+  ASSERT_EQ(without.visual().local().size(), total);
+  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
+    with.update(robot);
+    without.update(robot);
+    EXPECT_EQ(without.visual().longterm().size(), 0u);
+    // The same local map, except the points that the long-term map gave back on a revisit.
+    const std::set<std::int64_t> a = ids(without.visual().local()), b = ids(with.visual().local());
+    EXPECT_TRUE(std::includes(b.begin(), b.end(), a.begin(), a.end()));
+    EXPECT_LE(b.size() - a.size(), with.counters().moved_to_local);  // returned ones may leave again
+    EXPECT_EQ(rootKeysWithPlanes(without.lidar().voxels()), rootKeysWithPlanes(with.lidar().voxels()));
+  }
+  EXPECT_GT(with.counters().moved_to_longterm, 1000u);
+  EXPECT_EQ(without.counters().moved_to_longterm, 0u);
+  EXPECT_GT(with.counters().moved_to_local, 0u) << "the scene must have a revisit";
+  EXPECT_EQ(without.counters().moved_to_local, 0u);
+  EXPECT_EQ(without.counters().deleted_points, total - without.visual().local().size());
+  EXPECT_LT(without.stats().bytes, with.stats().bytes);
+}
+
 TEST(HybridMap, SlideWorkIsSpreadOverUpdatesWithinTheBudget) {
   HybridMapConfig cfg = smallConfig();
   cfg.max_removals_per_update = 150;

@@ -82,8 +82,8 @@ struct BlockSums {
 void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector<BodyPoint>& points,
                     const std::vector<Mat3>& cov_meas_world, const PlaneFinder& map, const LioConfig& cfg,
                     std::size_t begin, std::size_t end, std::vector<CachedAssociation>& assoc,
-                    std::vector<PointMatch>& matches, BlockSums& sums) {
-  sums = BlockSums{};
+                    std::vector<PointMatch>& matches, BlockSums& out) {
+  BlockSums sums;  // local, stored once at the end: no cache line shared with a neighbour block meanwhile
   const PoseCovariance pose_cov(x, P_gate);
   for (std::size_t i = begin; i < end; ++i) {
     PointMatch& pm = matches[i];
@@ -103,6 +103,7 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
     pm.matched = true;
     pm.normal = pl.normal;
   }
+  out = sums;
 }
 
 }  // namespace

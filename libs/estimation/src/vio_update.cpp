@@ -241,7 +241,8 @@ constexpr std::size_t kPointBlock = 8;
 /// Adds points [begin, end) of `pts` to `lin`.
 void linearizeBlock(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
                     const std::vector<PointState>& pts, std::size_t begin, std::size_t end, int level, double inv_var,
-                    bool exposure, Linearization& lin) {
+                    bool exposure, Linearization& out) {
+  Linearization lin;  // local, stored once at the end: no cache line shared with a neighbour block meanwhile
   CurrentGrid grid;
   for (std::size_t i = begin; i < end; ++i) {
     const PointState& ps = pts[i];
@@ -265,6 +266,7 @@ void linearizeBlock(const NavState& x, const Image& gray, const CameraModel& cam
     lin.cost += m.rr;
     lin.n += m.n;
   }
+  out = lin;
 }
 
 /// Normal equations of every used point at level `level`: blocks of points in parallel on `pool`,

@@ -41,6 +41,7 @@ void checkFields(const HybridMapConfig& c, const std::function<void(const char*,
 void HybridMapConfig::load(const ConfigNode& node) {
   node.get("local_edge_m", local_edge_m);
   node.get("slide_distance_m", slide_distance_m);
+  node.get("longterm_enabled", longterm_enabled);
   node.get("longterm_edge_m", longterm_edge_m);
   node.get("longterm_slide_m", longterm_slide_m);
   node.get("longterm_reference_only", longterm_reference_only);

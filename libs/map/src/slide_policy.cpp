@@ -20,7 +20,8 @@ SlidePolicy::SlidePolicy(const HybridMapConfig& config)
       slide_distance_m_(config.slide_distance_m),
       longterm_edge_m_(config.longterm_edge_m),
       longterm_slide_m_(config.longterm_slide_m),
-      longterm_reference_only_(config.longterm_reference_only) {}
+      longterm_reference_only_(config.longterm_reference_only),
+      longterm_enabled_(config.longterm_enabled) {}
 
 bool SlidePolicy::outsideLocal(const Vec3& c) const { return outsideCube(c, local_center_, 0.5 * local_edge_m_); }
 
@@ -71,8 +72,9 @@ bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
   const Vec3 c = local.keyOf(q->p_world).center(local.config().voxel_size_m);
   if (!outsideLocal(c)) return false;  // judged again: the cube may have moved since the list was made
   std::unique_ptr<VisualPoint> p = local.extract(id);
-  // Only points with a patch are worth keeping; beyond the long-term cube nothing is kept.
-  if (p->referenceObs() == nullptr || outsideLongterm(c)) {
+  // Only points with a patch are worth keeping; beyond the long-term cube (or without a long-term
+  // map) nothing is kept.
+  if (!longterm_enabled_ || p->referenceObs() == nullptr || outsideLongterm(c)) {
     ++work.rep.deleted_points;
     ++work.total.deleted_points;
     return true;

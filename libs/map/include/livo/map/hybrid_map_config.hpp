@@ -27,6 +27,9 @@ struct HybridMapConfig {
   double slide_distance_m = 20.0;  ///< slide once the robot is this far from the last slide position, m
 
   // Long-term visual map: visual points that left the local cube (paper: edge 800 m, slid every 100 m).
+  /// false: no long-term map; visual points leaving the local cube are deleted, not moved (the
+  /// ablation of issue #16: what the long-term map is worth).
+  bool longterm_enabled = true;
   double longterm_edge_m = 800.0;   ///< edge of the long-term cube, m (>= local_edge_m)
   double longterm_slide_m = 100.0;  ///< long-term slide distance, m
   /// A point moving to the long-term map keeps only its reference observation (one patch pyramid,

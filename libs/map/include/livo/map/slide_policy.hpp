@@ -54,6 +54,7 @@ class SlidePolicy {
 
   double local_edge_m_, slide_distance_m_, longterm_edge_m_, longterm_slide_m_;
   bool longterm_reference_only_;
+  bool longterm_enabled_;
 
   bool started_ = false;
   Vec3 local_center_ = Vec3::Zero();
