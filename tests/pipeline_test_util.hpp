@@ -40,9 +40,11 @@ struct RunSummary {
 using ImageEdit = std::function<bool(livo::Image&)>;
 
 /// Simulates `sc` (for `duration_s` when > 0) and runs the pipeline on it. visual_mode "off" skips
-/// rendering: one frame per scan. `threads`: PipelineConfig::threads.
+/// rendering: one frame per scan. `threads`: PipelineConfig::threads. `tweak` may change the
+/// configuration loaded from the simulator's rig before the pipeline is made.
 inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, const std::string& visual_mode = "off",
-                              const ImageEdit& edit = {}, int threads = 1) {
+                              const ImageEdit& edit = {}, int threads = 1,
+                              const std::function<void(livo::PipelineConfig&)>& tweak = {}) {
   using namespace livo;
   if (duration_s > 0) sc.duration_s = duration_s;
   sim::Simulator simulator(sc);
@@ -56,6 +58,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
   if (!camera) cfg.preprocess.camera_enabled = false;  // LiDAR-inertial: one frame per scan
   cfg.visual_mode = visual_mode;
   cfg.threads = threads;
+  if (tweak) tweak(cfg);
   Pipeline pipeline(cfg);
 
   RunSummary out;

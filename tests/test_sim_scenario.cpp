@@ -29,7 +29,7 @@ std::string readFile(const std::string& path) {
 // ---------------------------------------------------------------- scenarios and rig configs
 
 TEST(SimScenario, ShippedScenariosRunAndMatchTheirRigConfigs) {
-  for (const std::string name : {"room", "corridor", "street", "wall", "demo"}) {
+  for (const std::string name : {"room", "corridor", "street", "wall", "demo", "revisit"}) {
     SCOPED_TRACE(name);
     SimScenario sc = loadScenarioFile(std::string(LIVO_SOURCE_DIR) + "/config/sim/" + name + ".yaml");
     sc.duration_s = 0.15;  // a little of every sensor
@@ -48,6 +48,16 @@ TEST(SimScenario, ShippedScenariosRunAndMatchTheirRigConfigs) {
     sim.writeRigConfig(rig);
     EXPECT_EQ(rig.str(), readFile(std::string(LIVO_SOURCE_DIR) + "/config/sim_" + name + ".yaml"))
         << "regenerate with: livo-sim --scenario config/sim/" << name << ".yaml ... --rig config/sim_" << name << ".yaml";
+    // A scenario's rig_map section becomes the rig's map section (only revisit has one).
+    const ConfigFile f = ConfigFile::parse(rig.str(), "rig");
+    EXPECT_EQ(f.root().has("map"), name == "revisit");
+    if (name == "revisit") {
+      double edge = 0, longterm = 0;
+      f.root().section("map").require("local_edge_m", edge).require("longterm_edge_m", longterm);
+      EXPECT_EQ(edge, sc.rig_map.local_edge_m);
+      EXPECT_EQ(longterm, sc.rig_map.longterm_edge_m);
+      EXPECT_GT(edge, 0.0);
+    }
   }
 }
 
@@ -65,6 +75,8 @@ TEST(SimScenario, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_NE(message("trajectory:\n  kind: waypoints\n").find("trajectory.waypoints"), std::string::npos);
   EXPECT_NE(message("camera:\n  distortion: [0, 0]\n").find("camera.distortion"), std::string::npos);
   EXPECT_NE(message("imu:\n  rate_hz: abc\n").find("imu.rate_hz"), std::string::npos);
+  EXPECT_NE(message("rig_map:\n  local_edge_m: -40\n").find("rig_map.local_edge_m"), std::string::npos);
+  EXPECT_NE(message("rig_map:\n  slide_m: 4\n").find("rig_map.slide_m"), std::string::npos);
   EXPECT_EQ(message("seed: 3\nworld:\n  kind: wall\n"), "no error");
 }
 

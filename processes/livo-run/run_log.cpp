@@ -74,6 +74,11 @@ class FrameSink {
       announced_init_ = true;
     }
     if (r.lidarFailed()) counters_["lio_failed_frames"] += 1;
+    if (r.visual_used) {
+      counters_["visual_points_used"] += r.n_visual_points;
+      counters_["visual_longterm_points_used"] += r.n_longterm_visual_points;
+      counters_["visual_frames_with_longterm_points"] += r.n_longterm_visual_points > 0;
+    }
     if (args_.max_frames >= 0 && static_cast<std::int64_t>(outputs_.frames()) >= args_.max_frames) stop_ = true;
   }
   bool stopped() const { return stop_; }

@@ -138,6 +138,7 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   r.visual_used = true;
   r.n_visual_points = vs.update.points_used;
   r.n_new_visual_points = vs.n_new_points;
+  r.n_longterm_visual_points = vs.n_longterm_used;
   r.vio_rms_before = vs.update.rms_before;
   r.vio_rms_after = vs.update.rms_after;
   r.lio.state = x;  // the frame's output is the posterior after the visual update

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <utility>
 #include <sstream>
 
 namespace livo::sim {
@@ -65,6 +66,11 @@ void ExtrinsicsConfig::load(const ConfigNode& n) {
   n.get("T_imu_lidar", T_imu_lidar).get("T_imu_camera", T_imu_camera);
 }
 
+void RigMapConfig::load(const ConfigNode& n) {
+  n.get("local_edge_m", local_edge_m).get("slide_distance_m", slide_distance_m);
+  n.get("longterm_edge_m", longterm_edge_m).get("longterm_slide_m", longterm_slide_m).get("tile_edge_m", tile_edge_m);
+}
+
 void SimScenario::load(const ConfigNode& root) {
   root.get("seed", seed).get("duration_s", duration_s).get("start_time_s", start_time_s);
   root.get("environment", environment);
@@ -74,6 +80,7 @@ void SimScenario::load(const ConfigNode& root) {
   imu.load(root.section("imu"));
   camera.load(root.section("camera"));
   extrinsics.load(root.section("extrinsics"));
+  rig_map.load(root.section("rig_map"));
 }
 
 std::string SimScenario::environmentOrDefault() const {
@@ -90,6 +97,15 @@ struct Checker {
   }
 };
 
+void checkRigMap(const Checker& check, const RigMapConfig& m) {
+  for (const auto& [key, v] : {std::pair<const char*, double>{"rig_map.local_edge_m", m.local_edge_m},
+                               {"rig_map.slide_distance_m", m.slide_distance_m},
+                               {"rig_map.longterm_edge_m", m.longterm_edge_m},
+                               {"rig_map.longterm_slide_m", m.longterm_slide_m},
+                               {"rig_map.tile_edge_m", m.tile_edge_m}})
+    check(v >= 0.0 && v < 1e7, key, "must be in [0, 1e7) m (0: the map's default)");
+}
+
 bool oneOf(const std::string& v, std::initializer_list<const char*> options) {
   for (const char* o : options)
     if (v == o) return true;
@@ -103,6 +119,7 @@ void SimScenario::validate() const {
   check(seed >= 0, "seed", "must be >= 0");
   check(duration_s > 0.0 && duration_s <= 1e6, "duration_s", "must be in (0, 1e6] s");
   check(start_time_s >= 0.0 && start_time_s < 9e9, "start_time_s", "must be in [0, 9e9) s");
+  checkRigMap(check, rig_map);
   check(environment.empty() || oneOf(environment, {"indoor", "outdoor"}), "environment",
         "must be indoor or outdoor, got '" + environment + "'");
 

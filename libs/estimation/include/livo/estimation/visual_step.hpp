@@ -37,6 +37,8 @@ class VisualMapOps {
   virtual int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
                         Utime t, const std::vector<NewPointCandidate>& candidates,
                         const std::vector<bool>& occupied_cells) = 0;
+  /// Whether `p` belongs to a long-term visual map (false where the map has none, or does not know).
+  virtual bool isLongterm(const VisualPoint& /*p*/) const { return false; }
 };
 
 /// Forwards every VisualMapOps call except refine() to a map with VisualMap's per-frame operations.
@@ -70,6 +72,7 @@ class HybridVisualOps final : public VisualOpsOn<DualVisualMap> {
   explicit HybridVisualOps(HybridMap& map) : VisualOpsOn(map.visual()), planes_(&map.lidar().voxels()) {}
   void refine(VisualPoint& p) override { map_.refine(p, planes_); }
   const PlaneFinder* planes() const override { return planes_; }
+  bool isLongterm(const VisualPoint& p) const override { return map_.isLongterm(p); }
 
  private:
   const PlaneFinder* planes_;
@@ -103,6 +106,7 @@ struct VisualStepResult {
   std::vector<VisualPoint*> points;  ///< the points in view that were used (valid until the map changes)
   int n_new_points = 0;
   std::size_t removed_bad = 0;
+  int n_longterm_used = 0;  ///< points used by the update that came from the long-term visual map
 };
 
 /// Step 6 at the LiDAR posterior (x, P): retrieval of the points in view of the scan, the

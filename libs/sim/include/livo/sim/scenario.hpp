@@ -115,6 +115,21 @@ struct ExtrinsicsConfig {
   void load(const ConfigNode& n);
 };
 
+/// The `map` section of the rig config that livo-sim --rig writes, for scenarios scaled down from the
+/// map's defaults (a 200 m local cube holds all of a small revisit loop). 0: the key is not written
+/// (the map's default applies). Checked again by the map's own config when the rig is loaded.
+struct RigMapConfig {
+  double local_edge_m = 0.0;
+  double slide_distance_m = 0.0;
+  double longterm_edge_m = 0.0;
+  double longterm_slide_m = 0.0;
+  double tile_edge_m = 0.0;
+  bool any() const {
+    return local_edge_m > 0 || slide_distance_m > 0 || longterm_edge_m > 0 || longterm_slide_m > 0 || tile_edge_m > 0;
+  }
+  void load(const ConfigNode& n);
+};
+
 /// A complete scenario.
 struct SimScenario {
   std::string source = "<scenario>";  ///< file name, for error messages
@@ -129,6 +144,7 @@ struct SimScenario {
   ImuSimConfig imu;
   CameraSimConfig camera;
   ExtrinsicsConfig extrinsics;
+  RigMapConfig rig_map;            ///< section `rig_map`: the written rig's `map` section
 
   void load(const ConfigNode& root);
   /// Throws ConfigError on inconsistent values (naming the key).
