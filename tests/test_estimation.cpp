@@ -74,6 +74,19 @@ std::vector<Vec3> boxScene(std::mt19937& rng, int per_face) {
   return pts;
 }
 
+// Body points of world points `scene` seen from `truth`, with Gaussian noise and covariance var * I.
+std::vector<BodyPoint> scanFrom(const NavState& truth, const std::vector<Vec3>& scene, std::mt19937& rng,
+                                std::normal_distribution<double>& noise, double var) {
+  std::vector<BodyPoint> body;
+  for (const auto& p : scene) {
+    BodyPoint bp;
+    bp.p_imu = truth.R_world_imu.transpose() * (p - truth.p_world_imu) + Vec3(noise(rng), noise(rng), noise(rng));
+    bp.cov_imu = Mat3::Identity() * var;
+    body.push_back(bp);
+  }
+  return body;
+}
+
 }  // namespace
 
 TEST(LioUpdate, RecoversPerturbedPoseInBoxScene) {
@@ -96,14 +109,7 @@ TEST(LioUpdate, RecoversPerturbedPoseInBoxScene) {
   NavState truth;
   truth.R_world_imu = expSO3(Vec3(0.05, -0.03, 0.4));
   truth.p_world_imu = Vec3(0.5, 0.3, 0.1);
-  std::vector<BodyPoint> body;
-  const auto seen = boxScene(rng, 800);
-  for (const auto& p : seen) {
-    BodyPoint bp;
-    bp.p_imu = truth.R_world_imu.transpose() * (p - truth.p_world_imu) + Vec3(noise(rng), noise(rng), noise(rng));
-    bp.cov_imu = Mat3::Identity() * 2.5e-5;
-    body.push_back(bp);
-  }
+  const std::vector<BodyPoint> body = scanFrom(truth, boxScene(rng, 800), rng, noise, 2.5e-5);
   // Prior: 8 cm / 1.5 deg off, with a covariance that covers it.
   NavState x = truth;
   x.p_world_imu += Vec3(0.06, -0.05, 0.02);
@@ -138,13 +144,8 @@ TEST(LioUpdate, SamePosteriorToTheBitForEveryThreadCount) {
   map.insert(mpts);
   NavState truth;
   truth.R_world_imu = expSO3(Vec3(0.02, 0.04, -0.3));
-  std::vector<BodyPoint> body;
-  for (const auto& p : boxScene(rng, 1500)) {  // 9000 points: 36 association blocks
-    BodyPoint bp;
-    bp.p_imu = truth.R_world_imu.transpose() * (p - truth.p_world_imu) + Vec3(noise(rng), noise(rng), noise(rng));
-    bp.cov_imu = Mat3::Identity() * 2.5e-5;
-    body.push_back(bp);
-  }
+  // 9000 points: 36 association blocks.
+  const std::vector<BodyPoint> body = scanFrom(truth, boxScene(rng, 1500), rng, noise, 2.5e-5);
   NavState x0 = truth;
   x0.p_world_imu += Vec3(0.04, 0.03, -0.02);
   x0.R_world_imu = truth.R_world_imu * expSO3(Vec3(0.01, -0.01, 0.015));
@@ -187,14 +188,8 @@ TEST(LioUpdate, MatchesBatchGaussNewtonWithWeakPrior) {
   map.insert(mpts);
   NavState truth;
   truth.R_world_imu = expSO3(Vec3(0.0, 0.0, 0.2));
-  std::vector<BodyPoint> body;
   std::normal_distribution<double> noise(0, 0.01);
-  for (const auto& p : boxScene(rng, 300)) {
-    BodyPoint bp;
-    bp.p_imu = truth.R_world_imu.transpose() * (p - truth.p_world_imu) + Vec3(noise(rng), noise(rng), noise(rng));
-    bp.cov_imu = Mat3::Identity() * 1e-4;
-    body.push_back(bp);
-  }
+  const std::vector<BodyPoint> body = scanFrom(truth, boxScene(rng, 300), rng, noise, 1e-4);
   NavState x = truth;
   x.p_world_imu += Vec3(0.02, 0.01, -0.01);
   // A prior far weaker than the ~1800 residuals (information 400 vs ~1e7 per axis), yet wide enough
@@ -206,7 +201,6 @@ TEST(LioUpdate, MatchesBatchGaussNewtonWithWeakPrior) {
   cfg.max_iterations = 20;
   cfg.residual_floor_var = 0.0;
   NavState x_filter = x;
-  const StateCov P_prior = P;
   const LioUpdateResult fr = lidarUpdate(x_filter, P, body, map, cfg);
   EXPECT_TRUE(fr.converged);
 
