@@ -207,6 +207,30 @@ TEST(HybridMap, WithoutLongtermMapLeavingPointsAreDeleted) {
   EXPECT_LT(without.stats().bytes, with.stats().bytes);
 }
 
+// map.longterm_points_per_voxel: a point leaving the local cube into a full long-term voxel is deleted.
+TEST(HybridMap, LongtermPointsPerVoxelCapsTheLongtermMap) {
+  HybridMapConfig capped_cfg = smallConfig();
+  capped_cfg.longterm_points_per_voxel = 1;
+  HybridMap free_map(smallConfig(), voxels1m(), VisualMapConfig{});
+  HybridMap capped(capped_cfg, voxels1m(), VisualMapConfig{});
+  fillScene(free_map, 7);
+  fillScene(capped, 7);
+  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
+    free_map.update(robot);
+    capped.update(robot);
+  }
+  const VisualMap& lt = capped.visual().longterm();
+  std::map<VoxelKey, int, bool (*)(const VoxelKey&, const VoxelKey&)> per_voxel(
+      [](const VoxelKey& a, const VoxelKey& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+  lt.forEach([&](const VisualPoint& p) { ++per_voxel[lt.keyOf(p.p_world)]; });
+  ASSERT_GT(per_voxel.size(), 10u);
+  for (const auto& kv : per_voxel) EXPECT_EQ(kv.second, 1);
+  EXPECT_EQ(lt.numVoxels(), per_voxel.size());
+  // The uncapped map holds several points in some of these voxels: the cap did delete some.
+  EXPECT_LT(lt.size(), free_map.visual().longterm().size());
+  EXPECT_GT(capped.counters().deleted_points, free_map.counters().deleted_points);
+}
+
 TEST(HybridMap, SlideWorkIsSpreadOverUpdatesWithinTheBudget) {
   HybridMapConfig cfg = smallConfig();
   cfg.max_removals_per_update = 150;

@@ -21,7 +21,8 @@ SlidePolicy::SlidePolicy(const HybridMapConfig& config)
       longterm_edge_m_(config.longterm_edge_m),
       longterm_slide_m_(config.longterm_slide_m),
       longterm_reference_only_(config.longterm_reference_only),
-      longterm_enabled_(config.longterm_enabled) {}
+      longterm_enabled_(config.longterm_enabled),
+      longterm_per_voxel_(config.longterm_points_per_voxel) {}
 
 bool SlidePolicy::outsideLocal(const Vec3& c) const { return outsideCube(c, local_center_, 0.5 * local_edge_m_); }
 
@@ -65,6 +66,14 @@ void SlidePolicy::startLongterm(const Vec3& center, MapWork& work) {
   delete_cursor_ = 0;
 }
 
+bool SlidePolicy::longtermVoxelFull(const VisualPoint& p, MapWork& work) const {
+  if (longterm_per_voxel_ <= 0) return false;
+  const VisualMap& longterm = work.visual.longterm();
+  int n = 0;
+  longterm.forEachInVoxel(longterm.keyOf(p.p_world), [&n](const VisualPoint&) { ++n; });
+  return n >= longterm_per_voxel_;
+}
+
 bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
   VisualMap& local = work.visual.local();
   const VisualPoint* q = local.find(id);
@@ -74,7 +83,7 @@ bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
   std::unique_ptr<VisualPoint> p = local.extract(id);
   // Only points with a patch are worth keeping; beyond the long-term cube (or without a long-term
   // map) nothing is kept.
-  if (!longterm_enabled_ || p->referenceObs() == nullptr || outsideLongterm(c)) {
+  if (!longterm_enabled_ || p->referenceObs() == nullptr || outsideLongterm(c) || longtermVoxelFull(*p, work)) {
     ++work.rep.deleted_points;
     ++work.total.deleted_points;
     return true;

@@ -35,6 +35,10 @@ struct HybridMapConfig {
   /// A point moving to the long-term map keeps only its reference observation (one patch pyramid,
   /// about 2.2 kB per point instead of up to max_observations times that); false keeps them all.
   bool longterm_reference_only = true;
+  /// At most this many points per visual voxel in the long-term map: a point leaving the local cube
+  /// into a long-term voxel that is full is deleted (0: no limit). On a revisit the retrieval uses one
+  /// point per image grid cell, so a sparse long-term map gives nearly the same references.
+  int longterm_points_per_voxel = 0;
 
   // Memory budget (hybrid mode only).
   double memory_cap_mb = 0.0;  ///< cap on the accounted bytes of all map structures, MiB; 0 = none

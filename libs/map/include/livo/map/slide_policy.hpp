@@ -15,6 +15,7 @@
 #include "livo/common/so3.hpp"
 #include "livo/map/hybrid_map_config.hpp"
 #include "livo/map/map_maintenance.hpp"
+#include "livo/map/visual_point.hpp"
 #include "livo/map/voxel_key.hpp"
 
 #include <cstddef>
@@ -49,12 +50,15 @@ class SlidePolicy {
   void startLongterm(const Vec3& center, MapWork& work);
   /// Moves one local visual point to the long-term map (or drops it); returns false when unknown.
   bool moveToLongterm(std::int64_t id, MapWork& work);
+  /// The long-term voxel of `p` already holds longterm_points_per_voxel points (never with 0).
+  bool longtermVoxelFull(const VisualPoint& p, MapWork& work) const;
   bool outsideLocal(const Vec3& c) const;
   bool outsideLongterm(const Vec3& c) const;
 
   double local_edge_m_, slide_distance_m_, longterm_edge_m_, longterm_slide_m_;
   bool longterm_reference_only_;
   bool longterm_enabled_;
+  int longterm_per_voxel_;
 
   bool started_ = false;
   Vec3 local_center_ = Vec3::Zero();
