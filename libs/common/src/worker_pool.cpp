@@ -47,7 +47,7 @@ WorkerPool::~WorkerPool() {
 
 void WorkerPool::runBlocks() {
   // task_ and blocks_ do not change while any thread is inside a generation (forBlocks waits for
-  // active_ == 0 before the next one), so reading them here needs no lock.
+  // outstanding_ == 0 before the next one), so reading them here needs no lock.
   std::size_t done = 0;
   for (;;) {
     const std::size_t b = next_.fetch_add(1, std::memory_order_relaxed);
@@ -61,26 +61,23 @@ void WorkerPool::runBlocks() {
     ++done;
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  finished_ += done;
   outstanding_.fetch_sub(done, std::memory_order_release);
 }
 
 void WorkerPool::workerLoop() {
   std::size_t seen = 0;
   for (;;) {
-    pollFor([&] { return generation_seen_.load(std::memory_order_acquire) != seen; });
+    pollFor([&] { return generation_.load(std::memory_order_acquire) != seen; });
     {
       std::unique_lock<std::mutex> lock(mutex_);
       wake_.wait(lock, [&] { return stop_ || (task_ != nullptr && generation_ != seen); });
       if (stop_) return;
       seen = generation_;
-      ++active_;
       outstanding_.fetch_add(1, std::memory_order_relaxed);
     }
     runBlocks();
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      --active_;
       outstanding_.fetch_sub(1, std::memory_order_release);
     }
     done_.notify_one();
@@ -106,11 +103,9 @@ void WorkerPool::forBlocks(std::size_t blocks, const std::function<void(std::siz
     task_ = &f;
     blocks_ = blocks;
     next_.store(0, std::memory_order_relaxed);
-    finished_ = 0;
     error_ = nullptr;
     outstanding_.store(blocks, std::memory_order_relaxed);
-    ++generation_;
-    generation_seen_.store(generation_, std::memory_order_release);
+    generation_.fetch_add(1, std::memory_order_release);
   }
   wake_.notify_all();
   runBlocks();
@@ -118,7 +113,7 @@ void WorkerPool::forBlocks(std::size_t blocks, const std::function<void(std::siz
   std::exception_ptr error;
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    done_.wait(lock, [&] { return finished_ == blocks_ && active_ == 0; });
+    done_.wait(lock, [&] { return outstanding_.load(std::memory_order_relaxed) == 0; });
     task_ = nullptr;
     error = error_;
     error_ = nullptr;

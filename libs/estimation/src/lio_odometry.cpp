@@ -116,10 +116,12 @@ std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
 std::vector<PointWithCov> LioOdometry::worldPoints(const std::vector<BodyPoint>& pts) const {
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
+  const WorldPointCovariance point_cov(x_, P_);
   for (const auto& bp : pts) {
     PointWithCov pw;
-    pw.p_world = x_.R_world_imu * bp.p_imu + x_.p_world_imu;
-    pw.cov_world = worldPointCovariance(x_, P_, bp);
+    const Vec3 q = x_.R_world_imu * bp.p_imu;
+    pw.p_world = q + x_.p_world_imu;
+    pw.cov_world = point_cov(bp, q);
     world.push_back(pw);
   }
   return world;

@@ -31,11 +31,18 @@ PlaneResidual planeResidual(const NavState& x, const Vec3& p_imu, const Vec3& no
   return r;
 }
 
+WorldPointCovariance::WorldPointCovariance(const NavState& x, const StateCov& P)
+    : R_(x.R_world_imu),
+      S_(x.R_world_imu * P.block<3, 3>(sidx::kRot, sidx::kRot) * x.R_world_imu.transpose()),
+      P_pp_(P.block<3, 3>(sidx::kPos, sidx::kPos)) {}
+
+Mat3 WorldPointCovariance::operator()(const BodyPoint& bp, const Vec3& q) const {
+  const Mat3 Q = hat(q);
+  return R_ * bp.cov_imu * R_.transpose() + Q * S_ * Q.transpose() + P_pp_;
+}
+
 Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp) {
-  const Mat3& R = x.R_world_imu;
-  const Mat3 Rp = R * hat(bp.p_imu);
-  return R * bp.cov_imu * R.transpose() + Rp * P.block<3, 3>(sidx::kRot, sidx::kRot) * Rp.transpose() +
-         P.block<3, 3>(sidx::kPos, sidx::kPos);
+  return WorldPointCovariance(x, P)(bp, x.R_world_imu * bp.p_imu);
 }
 
 namespace {
@@ -46,23 +53,6 @@ using Vec66 = Eigen::Matrix<double, 6, 1>;
 /// Points per block of the association loop: fixed, so that the partial sums (and hence the update)
 /// are the same for every thread count.
 constexpr std::size_t kAssociationBlock = 256;
-
-/// The parts of worldPointCovariance that are the same for every point of one iteration: with
-/// q = R p, R [p]x = [q]x R, so R [p]x P_thth [p]x^T R^T = [q]x S [q]x^T with S = R P_thth R^T.
-struct PoseCovariance {
-  Mat3 R;
-  Mat3 S;     ///< R P_thth R^T
-  Mat3 P_pp;
-  PoseCovariance(const NavState& x, const StateCov& P)
-      : R(x.R_world_imu),
-        S(x.R_world_imu * P.block<3, 3>(sidx::kRot, sidx::kRot) * x.R_world_imu.transpose()),
-        P_pp(P.block<3, 3>(sidx::kPos, sidx::kPos)) {}
-  /// worldPointCovariance for body point `bp` whose rotated position R p is `q`.
-  Mat3 of(const BodyPoint& bp, const Vec3& q) const {
-    const Mat3 Q = hat(q);
-    return R * bp.cov_imu * R.transpose() + Q * S * Q.transpose() + P_pp;
-  }
-};
 
 /// One point's association at the current estimate.
 struct PointMatch {
@@ -84,14 +74,14 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
                     std::size_t begin, std::size_t end, std::vector<CachedAssociation>& assoc,
                     std::vector<PointMatch>& matches, BlockSums& out) {
   BlockSums sums;  // local, stored once at the end: no cache line shared with a neighbour block meanwhile
-  const PoseCovariance pose_cov(x, P_gate);
+  const WorldPointCovariance point_cov(x, P_gate);
   for (std::size_t i = begin; i < end; ++i) {
     PointMatch& pm = matches[i];
     pm.matched = false;
     PointWithCov pw;
     const Vec3 q = x.R_world_imu * points[i].p_imu;
     pw.p_world = q + x.p_world_imu;
-    pw.cov_world = pose_cov.of(points[i], q);
+    pw.cov_world = point_cov(points[i], q);
     PlaneMatch m;
     if (!assoc[i].find(map, pw, m)) continue;
     const Plane& pl = *m.plane;

@@ -126,7 +126,11 @@ void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R,
   const StateCov P = StateCov::Zero();
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
-  for (const auto& bp : pts) world.push_back({R * bp.p_imu + p, worldPointCovariance(x, P, bp)});
+  const WorldPointCovariance point_cov(x, P);
+  for (const auto& bp : pts) {
+    const Vec3 q = R * bp.p_imu;
+    world.push_back({q + p, point_cov(bp, q)});
+  }
   map_->insert(world);
 }
 

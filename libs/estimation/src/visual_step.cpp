@@ -45,12 +45,14 @@ VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, cons
     candidates = raycastCandidates(*map.planes(), cam, T_world_camera, map.gridFor(cam), occupied, no_scan->ray_step_m,
                                    no_scan->min_depth_m, no_scan->max_depth_m);
   candidates.reserve(candidates.size() + lio.matched_index.size());
+  const WorldPointCovariance point_cov(x, P);
   for (std::size_t k = 0; k < lio.matched_index.size() && lio.lio_ok; ++k) {  // registered points only
     const BodyPoint& bp = lio.points[static_cast<std::size_t>(lio.matched_index[k])];
     NewPointCandidate c;
-    c.p_world = x.R_world_imu * bp.p_imu + x.p_world_imu;
+    const Vec3 q = x.R_world_imu * bp.p_imu;
+    c.p_world = q + x.p_world_imu;
     c.normal_world = lio.matched_normals[k];
-    c.cov_world = worldPointCovariance(x, P, bp);
+    c.cov_world = point_cov(bp, q);
     candidates.push_back(c);
   }
   r.n_new_points = map.addPoints(gray, cam, T_world_camera, float(x.inv_exposure), t, candidates, occupied);

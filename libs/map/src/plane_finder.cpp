@@ -79,16 +79,6 @@ void PlaneIndex::reset(double voxel_size_m) {
   voxel_size_ = voxel_size_m;
 }
 
-bool PlaneIndex::searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const {
-  const auto it = voxels_.find(key);
-  if (it == voxels_.end()) return false;
-  bool found = false;
-  for (const Plane& plane : it->second) {
-    if (scorePlaneCandidate(plane, pw, sigma_num_, found, out)) found = true;
-  }
-  return found;
-}
-
 void PlaneIndex::visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const {
   const auto it = voxels_.find(key);
   if (it == voxels_.end()) return;
@@ -141,13 +131,9 @@ bool CachedAssociation::find(const PlaneFinder& finder, const PointWithCov& pw, 
   return near_.best(finder, near_key_, pw, out);
 }
 
-bool PlaneIndex::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
-  out = PlaneMatch{};
-  if (!keyablePoint(pw.p_world, voxel_size_)) return false;
-  if (searchVoxel(VoxelKey::fromPoint(pw.p_world, voxel_size_), pw, out)) return true;
-  VoxelKey near;
-  if (!neighbourVoxelKey(pw.p_world, voxel_size_, near)) return false;
-  return searchVoxel(near, pw, out);
+bool PlaneFinder::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
+  CachedAssociation one_shot;
+  return one_shot.find(*this, pw, out);
 }
 
 }  // namespace livo

@@ -11,8 +11,6 @@
 namespace livo {
 namespace {
 constexpr std::size_t kHeapOverhead = 16;  // see VoxelMap::bytes()
-// |p / s| below 2^52 keeps floor() exact and the key far from int64 overflow.
-constexpr double kMaxScaled = 4503599627370496.0;
 }  // namespace
 
 VoxelMap::VoxelMap(VoxelMapConfig config) : config_(std::move(config)) {
@@ -37,7 +35,7 @@ std::size_t VoxelMap::insert(const std::vector<PointWithCov>& points) {
   std::size_t taken = 0;
   for (const PointWithCov& pw : points) {
     const Vec3& p = pw.p_world;
-    if (!p.allFinite() || (p.cwiseAbs() / s).maxCoeff() >= kMaxScaled || !pw.cov_world.allFinite()) continue;
+    if (!keyablePoint(p, s) || !pw.cov_world.allFinite()) continue;
     const VoxelKey key = keyOf(p);
     auto it = roots_.find(key);
     if (it == roots_.end()) {
@@ -51,26 +49,6 @@ std::size_t VoxelMap::insert(const std::vector<PointWithCov>& points) {
 
 bool VoxelMap::neighbourKey(const Vec3& p, VoxelKey& out) const {
   return neighbourVoxelKey(p, config_.voxel_size_m, out);
-}
-
-bool VoxelMap::searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const {
-  const auto it = roots_.find(key);
-  if (it == roots_.end()) return false;
-  bool found = false;
-  it->second->forEachPlane([&](const Plane& plane) {
-    if (scorePlaneCandidate(plane, pw, config_.sigma_num, found, out)) found = true;
-  });
-  return found;
-}
-
-bool VoxelMap::findBestPlane(const PointWithCov& pw, PlaneMatch& out) const {
-  out = PlaneMatch{};
-  const Vec3& p = pw.p_world;
-  if (!p.allFinite() || (p.cwiseAbs() / config_.voxel_size_m).maxCoeff() >= kMaxScaled) return false;
-  if (searchVoxel(keyOf(p), pw, out)) return true;
-  VoxelKey near;
-  if (!neighbourKey(p, near)) return false;
-  return searchVoxel(near, pw, out);
 }
 
 void VoxelMap::visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const {

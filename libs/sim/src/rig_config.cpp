@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <ostream>
 #include <string>
-#include <utility>
 
 namespace livo::sim {
 
@@ -85,15 +84,9 @@ void writeRigConfig(const SimScenario& sc, std::ostream& out) {
       << "  tau_translation_m: " << (outdoor ? "2.0" : "1.0") << "\n"
       << "  tau_rotation_deg: 60.0\n";
   if (sc.rig_map.any()) {
-    const RigMapConfig& m = sc.rig_map;
     out << "\nmap:  # scaled with the scenario (its rig_map section)\n";
-    const std::pair<const char*, double> keys[] = {{"local_edge_m", m.local_edge_m},
-                                                   {"slide_distance_m", m.slide_distance_m},
-                                                   {"longterm_edge_m", m.longterm_edge_m},
-                                                   {"longterm_slide_m", m.longterm_slide_m},
-                                                   {"tile_edge_m", m.tile_edge_m}};
-    for (const auto& [key, v] : keys)
-      if (v > 0) out << "  " << key << ": " << num(v) << "\n";
+    for (const auto& [key, field] : RigMapConfig::kKeys)
+      if (sc.rig_map.*field > 0) out << "  " << key << ": " << num(sc.rig_map.*field) << "\n";
   }
 }
 

@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <fstream>
-#include <utility>
 #include <sstream>
 
 namespace livo::sim {
@@ -66,11 +65,6 @@ void ExtrinsicsConfig::load(const ConfigNode& n) {
   n.get("T_imu_lidar", T_imu_lidar).get("T_imu_camera", T_imu_camera);
 }
 
-void RigMapConfig::load(const ConfigNode& n) {
-  n.get("local_edge_m", local_edge_m).get("slide_distance_m", slide_distance_m);
-  n.get("longterm_edge_m", longterm_edge_m).get("longterm_slide_m", longterm_slide_m).get("tile_edge_m", tile_edge_m);
-}
-
 void SimScenario::load(const ConfigNode& root) {
   root.get("seed", seed).get("duration_s", duration_s).get("start_time_s", start_time_s);
   root.get("environment", environment);
@@ -98,12 +92,8 @@ struct Checker {
 };
 
 void checkRigMap(const Checker& check, const RigMapConfig& m) {
-  for (const auto& [key, v] : {std::pair<const char*, double>{"rig_map.local_edge_m", m.local_edge_m},
-                               {"rig_map.slide_distance_m", m.slide_distance_m},
-                               {"rig_map.longterm_edge_m", m.longterm_edge_m},
-                               {"rig_map.longterm_slide_m", m.longterm_slide_m},
-                               {"rig_map.tile_edge_m", m.tile_edge_m}})
-    check(v >= 0.0 && v < 1e7, key, "must be in [0, 1e7) m (0: the map's default)");
+  for (const auto& [key, field] : RigMapConfig::kKeys)
+    check(m.*field >= 0.0 && m.*field < 1e7, std::string("rig_map.") + key, "must be in [0, 1e7) m (0: the map's default)");
 }
 
 bool oneOf(const std::string& v, std::initializer_list<const char*> options) {

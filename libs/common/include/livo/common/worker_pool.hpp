@@ -61,15 +61,13 @@ class WorkerPool {
   std::mutex mutex_;
   std::condition_variable wake_;  ///< workers wait for a new generation
   std::condition_variable done_;  ///< the caller waits for the last block
-  std::size_t generation_ = 0;
-  std::atomic<std::size_t> generation_seen_{0};  ///< generation_, readable without the lock (polling)
-  std::atomic<std::size_t> outstanding_{0};      ///< blocks not finished + workers inside (polling)
+  // Written under mutex_; atomic so that the polls may read them without it.
+  std::atomic<std::size_t> generation_{0};   ///< one per forBlocks() call with workers
+  std::atomic<std::size_t> outstanding_{0};  ///< blocks not finished + workers inside the generation
   bool stop_ = false;
   const std::function<void(std::size_t)>* task_ = nullptr;
   std::size_t blocks_ = 0;
   std::atomic<std::size_t> next_{0};
-  std::size_t finished_ = 0;  ///< blocks done in this generation (under mutex_)
-  int active_ = 0;            ///< workers inside the current generation (under mutex_)
   std::exception_ptr error_;
 };
 

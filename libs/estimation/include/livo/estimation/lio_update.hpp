@@ -57,6 +57,18 @@ PlaneResidual planeResidual(const NavState& x, const Vec3& p_imu, const Vec3& no
 /// omits R in the middle term; ALGORITHMS.md section 2 [quirk]).
 Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp);
 
+/// worldPointCovariance for many points at one (x, P): the pose parts once. With q = R p,
+/// R [p]x = [q]x R, so R [p]x P_thth [p]x^T R^T = [q]x S [q]x^T with S = R P_thth R^T.
+class WorldPointCovariance {
+ public:
+  WorldPointCovariance(const NavState& x, const StateCov& P);
+  /// The covariance of body point `bp`, whose rotated position R p_imu is `q`.
+  Mat3 operator()(const BodyPoint& bp, const Vec3& q) const;
+
+ private:
+  Mat3 R_, S_, P_pp_;
+};
+
 /// Iterated update: re-associates every point with the map in every iteration (information form,
 /// the candidate planes of a point kept while it stays in its voxel: CachedAssociation,
 /// ALGORITHMS.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the

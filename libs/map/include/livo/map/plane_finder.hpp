@@ -30,12 +30,14 @@ struct PlaneMatch {
 class PlaneFinder {
  public:
   virtual ~PlaneFinder() = default;
-  /// Most probable plane for a query point; false when no plane passes the gates.
-  virtual bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const = 0;
+  /// Most probable plane for a query point (ALGORITHMS.md section 2, "Association"): every plane of
+  /// the point's root voxel is scored (scorePlaneCandidate: 3-radius and 3-sigma gates, highest
+  /// probability wins); if none is accepted (or the voxel does not exist), those of ONE neighbour
+  /// root voxel (neighbourVoxelKey). False when no plane passes the gates. The rule is written once,
+  /// in CachedAssociation::find; this is its one-shot use.
+  bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const;
 
-  // What findBestPlane is made of, for callers that keep a point's candidates across iterations
-  // (CachedAssociation): findBestPlane(pw) equals scoring the planes of the point's root voxel
-  // and, when none is accepted, those of its one neighbour (neighbourVoxelKey), in this order.
+  // What a map provides for the search.
   /// Edge of the root voxels, m.
   virtual double rootVoxelSize() const = 0;
   /// Gate width of scorePlaneCandidate, sigmas.
@@ -83,7 +85,7 @@ bool neighbourVoxelKey(const Vec3& p, double voxel_size, VoxelKey& out);
 /// True when `p` can be keyed at `voxel_size` (finite and |p / s| < 2^52).
 bool keyablePoint(const Vec3& p, double voxel_size);
 
-/// Flat plane leaves per root voxel (e.g. a received submap) searched like VoxelMap::findBestPlane.
+/// Flat plane leaves per root voxel (e.g. a received submap), searched by PlaneFinder::findBestPlane.
 class PlaneIndex : public PlaneFinder {
  public:
   /// Throws std::invalid_argument unless voxel_size_m > 0 and sigma_num > 0.
@@ -92,7 +94,6 @@ class PlaneIndex : public PlaneFinder {
   void clear();
   /// Replaces the voxel size (keys of later add() calls must use it); clears the index.
   void reset(double voxel_size_m);
-  bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const override;
   double rootVoxelSize() const override { return voxel_size_; }
   double sigmaNum() const override { return sigma_num_; }
   void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const override;
@@ -101,7 +102,6 @@ class PlaneIndex : public PlaneFinder {
   double voxelSize() const { return voxel_size_; }
 
  private:
-  bool searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const;
   double voxel_size_;
   double sigma_num_;
   std::unordered_map<VoxelKey, std::vector<Plane>, VoxelKeyHash> voxels_;

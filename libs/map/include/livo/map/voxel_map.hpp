@@ -52,14 +52,14 @@ class VoxelMap : public PlaneFinder {
   std::size_t insert(const std::vector<PointWithCov>& points);
 
   using PlaneMatch = livo::PlaneMatch;
-  /// Most probable plane for a query point (ALGORITHMS.md section 2, "Association"): every plane
-  /// leaf of the point's root voxel is a candidate when the in-plane distance
+  /// findBestPlane (PlaneFinder, ALGORITHMS.md section 2, "Association"): every plane leaf of the
+  /// point's root voxel is a candidate when the in-plane distance
   /// sqrt(|p - q|^2 - d^2) <= sigma_num * radius and |d| < sigma_num * sqrt(sigma_l), with
   /// sigma_l = J Sigma_nq J^T + n^T Sigma_w n, J = [(p - q)^T, -n^T]; the highest
   /// sigma_l^-1/2 exp(-d^2 / 2 sigma_l) wins. If none is accepted (or the voxel does not exist), ONE
   /// neighbour root voxel is tried: step +1 along each axis where the point lies in the upper
   /// quarter of its voxel ((p/s - floor(p/s)) > 0.75), -1 where it lies in the lower quarter (< 0.25).
-  bool findBestPlane(const PointWithCov& pw, PlaneMatch& out) const override;
+  using PlaneFinder::findBestPlane;
   double rootVoxelSize() const override { return config_.voxel_size_m; }
   double sigmaNum() const override { return config_.sigma_num; }
   void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const override;
@@ -105,7 +105,6 @@ class VoxelMap : public PlaneFinder {
 
  private:
   /// Best accepted plane of one root voxel's octree; updates `out` when better than out.probability.
-  bool searchVoxel(const VoxelKey& key, const PointWithCov& pw, PlaneMatch& out) const;
 
   VoxelMapConfig config_;
   std::unordered_map<VoxelKey, std::unique_ptr<OctreeNode>, VoxelKeyHash> roots_;

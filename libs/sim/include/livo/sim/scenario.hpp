@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace livo::sim {
@@ -124,10 +125,19 @@ struct RigMapConfig {
   double longterm_edge_m = 0.0;
   double longterm_slide_m = 0.0;
   double tile_edge_m = 0.0;
+  /// Every key with its field, in the order written (load, validation and the rig writer use it).
+  static constexpr std::pair<const char*, double RigMapConfig::*> kKeys[] = {
+      {"local_edge_m", &RigMapConfig::local_edge_m},         {"slide_distance_m", &RigMapConfig::slide_distance_m},
+      {"longterm_edge_m", &RigMapConfig::longterm_edge_m},   {"longterm_slide_m", &RigMapConfig::longterm_slide_m},
+      {"tile_edge_m", &RigMapConfig::tile_edge_m}};
   bool any() const {
-    return local_edge_m > 0 || slide_distance_m > 0 || longterm_edge_m > 0 || longterm_slide_m > 0 || tile_edge_m > 0;
+    for (const auto& [key, field] : kKeys)
+      if (this->*field > 0) return true;
+    return false;
   }
-  void load(const ConfigNode& n);
+  void load(const ConfigNode& n) {
+    for (const auto& [key, field] : kKeys) n.get(key, this->*field);
+  }
 };
 
 /// A complete scenario.
