@@ -36,11 +36,6 @@ WorldPointCovariance::WorldPointCovariance(const NavState& x, const StateCov& P)
       S_(x.R_world_imu * P.block<3, 3>(sidx::kRot, sidx::kRot) * x.R_world_imu.transpose()),
       P_pp_(P.block<3, 3>(sidx::kPos, sidx::kPos)) {}
 
-Mat3 WorldPointCovariance::operator()(const BodyPoint& bp, const Vec3& q) const {
-  const Mat3 Q = hat(q);
-  return R_ * bp.cov_imu * R_.transpose() + Q * S_ * Q.transpose() + P_pp_;
-}
-
 Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp) {
   return WorldPointCovariance(x, P)(bp, x.R_world_imu * bp.p_imu);
 }

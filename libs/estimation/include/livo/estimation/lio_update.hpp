@@ -62,8 +62,12 @@ Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint&
 class WorldPointCovariance {
  public:
   WorldPointCovariance(const NavState& x, const StateCov& P);
-  /// The covariance of body point `bp`, whose rotated position R p_imu is `q`.
-  Mat3 operator()(const BodyPoint& bp, const Vec3& q) const;
+  /// The covariance of body point `bp`, whose rotated position R p_imu is `q` (inline: it runs per
+  /// point and iteration in the association).
+  Mat3 operator()(const BodyPoint& bp, const Vec3& q) const {
+    const Mat3 Q = hat(q);
+    return R_ * bp.cov_imu * R_.transpose() + Q * S_ * Q.transpose() + P_pp_;
+  }
 
  private:
   Mat3 R_, S_, P_pp_;
