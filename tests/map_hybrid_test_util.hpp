@@ -52,6 +52,7 @@ inline std::unique_ptr<VisualPoint> visualPoint(std::int64_t id, const Vec3& p, 
       vp->obs.back().utime = i;  // marks the observation
     }
     vp->reference = n_obs - 1;
+    vp->views = n_obs;
   }
   return vp;
 }

@@ -36,7 +36,7 @@ Eigen::Matrix<double, N, N> randCov(double s) {  // A A^T: symmetric PSD
 VisualObservation randObs() {
   VisualObservation o;
   o.utime = uniInt(0, 1'800'000'000'000'000);
-  for (auto& v : o.patch.values) v = static_cast<float>(uni(0, 255));
+  for (auto& v : o.patch.values) v = static_cast<std::uint8_t>(uniInt(0, 255));
   o.T_world_camera = randPose();
   o.px = Vec2(uni(0, 1280), uni(0, 1024));
   o.inv_exposure = static_cast<float>(uni(0.2, 5));
@@ -53,6 +53,7 @@ VisualPoint randVisualPoint(int n_obs) {
   p.reference = n_obs > 0 ? int(uniInt(-1, n_obs - 1)) : -1;
   p.converged = uniInt(0, 1) == 1;
   p.bad_updates = uniInt(0, 5);
+  p.views = n_obs + std::int32_t(uniInt(0, 9));
   return p;
 }
 SubmapPlane randPlane() {
@@ -117,6 +118,7 @@ void expectVisualPointEq(const VisualPoint& a, const VisualPoint& b) {
   EXPECT_EQ(a.reference, b.reference);
   EXPECT_EQ(a.converged, b.converged);
   EXPECT_EQ(a.bad_updates, b.bad_updates);
+  EXPECT_EQ(a.views, b.views);
   ASSERT_EQ(a.obs.size(), b.obs.size());
   for (std::size_t i = 0; i < a.obs.size(); ++i) expectObsEq(a.obs[i], b.obs[i]);
 }
@@ -338,6 +340,8 @@ TEST(MapMessages, ValidationNamesTheFieldForEveryClassOfError) {
   expectError(validate(s), "submap_t.planes[3].octant[1]", "unused (-1)");
   s = good; s.visual_points[0].reference = 2;
   expectError(validate(s), "submap_t.visual_points[0].reference", "outside -1..1");
+  s = good; s.visual_points[0].views = s.visual_points[0].num_patches - 1;
+  expectError(validate(s), "submap_t.visual_points[0].views", "fewer than num_patches");
 
   // Patch layout: 3 levels of 12 x 12 crops.
   livo::patch_t p = toMsg(randObs());
@@ -354,6 +358,8 @@ TEST(MapMessages, ValidationNamesTheFieldForEveryClassOfError) {
   expectError(validate(p), "patch_t.inv_exposure");
   p = toMsg(randObs()); p.values[100] = INFINITY;
   expectError(validate(p), "patch_t.values[100]");
+  p = toMsg(randObs()); p.values[7] = 300.f;
+  expectError(validate(p), "patch_t.values[7]", "gray value in [0, 255]");
 
   // Query and update.
   MapQuery q;
@@ -479,7 +485,7 @@ TEST(MessageConversions, ToMsgRejectsWhatTheMessageCannotCarry) {
 TEST(MapMessages, LargeSubmapEncodesAndDecodes) {
   constexpr std::size_t kPlaneBytes = 3 * 4 + 1 + 3 + 3 * 8 + 3 * 8 + 36 * 8 + 4 + 4 + 4 + 1;       // 365
   constexpr std::size_t kPatchBytes = 8 + 1 + 1 + 4 + 432 * 4 + 7 * 8 + 2 * 4 + 4 + 4;             // 1814
-  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4 + 4;                    // 93 + patches
+  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4 + 4 + 4;                // 97 + patches
   std::size_t empty = 0;
   roundTrip<livo::submap_t>(Submap(), &empty);
   for (const int n_obs : {1, 8}) {

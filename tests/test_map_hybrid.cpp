@@ -5,6 +5,7 @@
 // long drive and slide timing: test_map_hybrid_drive.cpp.
 #include "livo/common/timing.hpp"
 #include "livo/map/hybrid_map.hpp"
+#include "livo/map/map_file.hpp"
 #include "livo/sensors/camera_model.hpp"
 #include "map_hybrid_test_util.hpp"
 
@@ -12,10 +13,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <random>
 #include <set>
+#include <sstream>
 #include <tuple>
 
 using namespace livo;
@@ -50,6 +53,7 @@ HybridMapConfig smallConfig() {
   c.longterm_slide_m = 10.0;
   c.tile_edge_m = 4.0;
   c.max_removals_per_update = 0;
+  c.longterm_min_observations = 1;  // the slide model keeps every point with a reference
   return c;
 }
 
@@ -229,6 +233,40 @@ TEST(HybridMap, LongtermPointsPerVoxelCapsTheLongtermMap) {
   // The uncapped map holds several points in some of these voxels: the cap did delete some.
   EXPECT_LT(lt.size(), free_map.visual().longterm().size());
   EXPECT_GT(capped.counters().deleted_points, free_map.counters().deleted_points);
+}
+
+// map.longterm_min_observations: a point leaving the local cube with fewer observations is deleted;
+// the long-term map is the one without the rule less exactly those points (fillScene: 1 + id % 4
+// observations per point).
+TEST(HybridMap, LongtermMinObservationsKeepsOnlyPointsSeenOftenEnough) {
+  HybridMapConfig strict_cfg = smallConfig();
+  strict_cfg.longterm_min_observations = 3;
+  HybridMap all(smallConfig(), voxels1m(), VisualMapConfig{});
+  HybridMap strict(strict_cfg, voxels1m(), VisualMapConfig{});
+  fillScene(all, 7);
+  fillScene(strict, 7);
+  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
+    all.update(robot);
+    strict.update(robot);
+  }
+  std::set<std::int64_t> want;
+  for (std::int64_t id : ids(all.visual().longterm()))
+    if (1 + id % 4 >= 3) want.insert(id);
+  ASSERT_GT(want.size(), 100u);
+  EXPECT_EQ(ids(strict.visual().longterm()), want);
+  EXPECT_LT(strict.stats().bytes_visual_longterm, all.stats().bytes_visual_longterm);
+  // Deleted instead: at least those (more where one returned to the local map and left again).
+  EXPECT_GE(strict.counters().deleted_points - all.counters().deleted_points,
+            all.visual().longterm().size() - want.size());
+  // Bad values are refused, naming the key.
+  HybridMapConfig bad = smallConfig();
+  bad.longterm_min_observations = 0;
+  try {
+    bad.validate();
+    ADD_FAILURE() << "longterm_min_observations 0 must be refused";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("longterm_min_observations"), std::string::npos) << e.what();
+  }
 }
 
 TEST(HybridMap, SlideWorkIsSpreadOverUpdatesWithinTheBudget) {
@@ -509,4 +547,62 @@ TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
   std::cout << "bytes: lidar " << s.bytes_lidar << " (" << double(s.bytes_lidar) / double(s.local_voxels)
             << " per root voxel), visual local " << s.bytes_visual_local << ", long-term " << s.bytes_visual_longterm
             << ", index " << s.bytes_index << "\n";
+}
+
+// Map files of version 1 stored patch samples as floats; they load into today's byte samples rounded.
+// The oracle: a version-2 file of the same map with the header's version and the one patch rewritten.
+TEST(HybridMap, MapFileOfVersionOneLoadsWithItsPatchesRounded) {
+  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
+  auto vp = visualPoint(42, Vec3(1, 2, 3));
+  for (int i = 0; i < PatchPyramid::kValues; ++i) vp->obs[0].patch.values[std::size_t(i)] = std::uint8_t((i * 7 + 3) % 251);
+  const PatchPyramid stored = vp->obs[0].patch;
+  ASSERT_TRUE(map.visual().local().insert(std::move(vp)));
+  std::ostringstream v2;
+  saveMap(v2, map);
+  std::string bytes = v2.str();
+  const std::string patch(reinterpret_cast<const char*>(stored.values.data()), stored.values.size());
+  const std::size_t at = bytes.find(patch);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes.find(patch, at + 1), std::string::npos) << "the patch must be found once";
+  std::string floats(std::size_t(PatchPyramid::kValues) * sizeof(float), '\0');
+  for (int i = 0; i < PatchPyramid::kValues; ++i) {
+    // Off by up to 0.4 from the gray level, both ways: rounding must give it back.
+    const float v = float(stored.values[std::size_t(i)]) + (i % 2 ? 0.4f : -0.4f) * float(stored.values[std::size_t(i)] > 0);
+    std::memcpy(&floats[std::size_t(i) * sizeof(float)], &v, sizeof(float));
+  }
+  // Version 1 has no view count: the int32 before the observation count (uint32) and its utime (int64).
+  const std::size_t views_at = at - 8 - 4 - 4;
+  std::string v1 = bytes.substr(0, views_at) + bytes.substr(views_at + 4, at - views_at - 4) + floats +
+                   bytes.substr(at + patch.size());
+  const std::uint32_t one = 1;
+  std::memcpy(&v1[8], &one, sizeof(one));  // after the 8-byte magic
+  HybridMap loaded(smallConfig(), voxels1m(), VisualMapConfig{});
+  std::istringstream in(v1);
+  loadMap(in, "v1", loaded);
+  const VisualPoint* p = loaded.visual().local().find(42);
+  ASSERT_NE(p, nullptr);
+  EXPECT_TRUE(p->obs[0].patch.values == stored.values);
+  EXPECT_EQ(p->views, 1);  // version 1: the observations it holds
+  // A version-1 patch sample that is no gray value is refused with the reason.
+  std::string bad = v1;
+  const float junk = 900.f;
+  std::memcpy(&bad[at - 4 + 5 * sizeof(float)], &junk, sizeof(float));
+  std::istringstream bad_in(bad);
+  try {
+    loadMap(bad_in, "bad", loaded);
+    ADD_FAILURE() << "a sample of 900 must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not a gray value"), std::string::npos) << e.what();
+  }
+  // Versions this build does not know are refused, naming both it reads.
+  std::string v3 = bytes;
+  const std::uint32_t three = 3;
+  std::memcpy(&v3[8], &three, sizeof(three));
+  std::istringstream v3_in(v3);
+  try {
+    loadMap(v3_in, "v3", loaded);
+    ADD_FAILURE() << "version 3 must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("reads 1 and 2"), std::string::npos) << e.what();
+  }
 }

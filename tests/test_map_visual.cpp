@@ -106,16 +106,31 @@ TEST(VisualPatch, PyramidMatchesDirectBilinearReads) {
           const double ax = x - x0, ay = y - y0;
           const double v = (1 - ay) * ((1 - ax) * pixelAt(im, x0, y0) + ax * pixelAt(im, x0 + 1, y0)) +
                            ay * ((1 - ax) * pixelAt(im, x0, y0 + 1) + ax * pixelAt(im, x0 + 1, y0 + 1));
-          ASSERT_NEAR(pyr.at(l, r, c), v, 1e-3) << "level " << l << " r " << r << " c " << c;
+          // Stored as whole gray levels: the read rounded to the nearest.
+          ASSERT_NEAR(pyr.at(l, r, c), v, 0.5 + 1e-4) << "level " << l << " r " << r << " c " << c;
+          ASSERT_EQ(pyr.at(l, r, c), std::floor(pyr.at(l, r, c)));
         }
       }
       // The patch proper is the crop without its margin, on the offsets patchOffset(i).
       const PatchValues patch = patchOfLevel(pyr, l);
       float direct = 0.f;
       ASSERT_TRUE(sampleBilinear(im, px.x() + patchOffset(3) * stride, px.y() + patchOffset(5) * stride, direct));
-      EXPECT_NEAR(patch[5 * PatchPyramid::kSize + 3], direct, 1e-3);
+      EXPECT_NEAR(patch[5 * PatchPyramid::kSize + 3], direct, 0.5 + 1e-4);
     }
   }
+}
+
+// Patches are stored as whole gray levels (PyramidMatchesDirectBilinearReads: within half a level of
+// the bilinear read); the rounding rule at the ends and for values that are not gray levels.
+TEST(VisualPatch, SamplesRoundToTheNearestGrayLevel) {
+  EXPECT_EQ(PatchPyramid::quantize(-3.f), 0);
+  EXPECT_EQ(PatchPyramid::quantize(std::numeric_limits<float>::quiet_NaN()), 0);
+  EXPECT_EQ(PatchPyramid::quantize(0.49f), 0);
+  EXPECT_EQ(PatchPyramid::quantize(0.5f), 1);
+  EXPECT_EQ(PatchPyramid::quantize(254.49f), 254);
+  EXPECT_EQ(PatchPyramid::quantize(254.5f), 255);
+  EXPECT_EQ(PatchPyramid::quantize(1e9f), 255);
+  EXPECT_EQ(sizeof(PatchPyramid), std::size_t(PatchPyramid::kValues));
 }
 
 TEST(VisualPatch, BorderKeepsEverySampleInside) {

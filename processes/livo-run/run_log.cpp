@@ -232,6 +232,11 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   ms.visual_points_local = hs.visual_points_local;
   ms.visual_points_longterm = hs.visual_points_longterm;
   ms.bytes = hs.bytes;
+  ms.has_parts = true;
+  ms.bytes_lidar = hs.bytes_lidar;
+  ms.bytes_visual_local = hs.bytes_visual_local;
+  ms.bytes_visual_longterm = hs.bytes_visual_longterm;
+  ms.bytes_index = hs.bytes_index;
   if (!args.no_maps) {
     sink.cloud.writePcd(args.out + "/map.pcd");
     if (cfg.exporter.octomap_enabled) sink.occupancy.writeBt(args.out + "/map.bt");

@@ -76,7 +76,7 @@ std::vector<std::uint8_t> tagged(int type, const std::vector<std::uint8_t>& byte
 VisualObservation seedObs() {
   VisualObservation o;
   o.utime = 1000;
-  for (std::size_t i = 0; i < o.patch.values.size(); ++i) o.patch.values[i] = float(i % 200);
+  for (std::size_t i = 0; i < o.patch.values.size(); ++i) o.patch.values[i] = std::uint8_t(i % 200);
   o.px = Vec2(10, 20);
   o.score = 0.5f;
   return o;

@@ -2,6 +2,7 @@
 
 #include "message_checks.hpp"
 
+#include <algorithm>
 #include <climits>
 #include <stdexcept>
 #include <string>
@@ -53,6 +54,9 @@ Validation checkPatch(const livo::patch_t& m, const MessageLimits& lim) {
                             " but levels * size * size = " + std::to_string(kPatchValues));
   LIVO_MSG_CHECK(size(m.values, m.num_values, "values", "num_values"));
   LIVO_MSG_CHECK(finite(m.values.data(), m.num_values, "values"));
+  for (std::size_t i = 0; i < m.values.size(); ++i)
+    if (!(m.values[i] >= -0.5f && m.values[i] <= 255.5f))
+      return Validation::fail("values[" + std::to_string(i) + "]: expected a gray value in [0, 255], got " + num(m.values[i]));
   LIVO_MSG_CHECK(pose7(m.T_world_camera, "T_world_camera"));
   LIVO_MSG_CHECK(finite(m.pixel, 2, "pixel"));
   if (!std::isfinite(m.inv_exposure) || !(m.inv_exposure > 0.f))
@@ -70,6 +74,9 @@ Validation checkVisualPoint(const livo::visual_point_t& m, const MessageLimits& 
   if (m.reference < -1 || m.reference >= m.num_patches)
     return Validation::fail("reference: index " + std::to_string(m.reference) + " outside -1.." +
                             std::to_string(m.num_patches - 1) + " (num_patches " + std::to_string(m.num_patches) + ")");
+  if (m.views < m.num_patches)
+    return Validation::fail("views: " + std::to_string(m.views) + " observations ever stored, fewer than num_patches " +
+                            std::to_string(m.num_patches));
   for (std::int32_t i = 0; i < m.num_patches; ++i)
     LIVO_MSG_CHECK(nest(checkPatch(m.patches[std::size_t(i)], lim), "patches[" + std::to_string(i) + "]"));
   return Validation::ok();
@@ -190,7 +197,7 @@ Validation checkMapStats(const livo::map_stats_t& m) {
 // ---------- conversions of validated messages ----------
 void convert(const livo::patch_t& m, VisualObservation& o) {
   o.utime = m.utime;
-  std::copy(m.values.begin(), m.values.end(), o.patch.values.begin());
+  std::transform(m.values.begin(), m.values.end(), o.patch.values.begin(), PatchPyramid::quantize);
   o.T_world_camera = poseFromArray(m.T_world_camera);
   o.px = Vec2(m.pixel[0], m.pixel[1]);
   o.inv_exposure = m.inv_exposure;
@@ -206,6 +213,7 @@ void convert(const livo::visual_point_t& m, VisualPoint& p) {
   p.converged = m.converged != 0;
   p.bad_updates = m.bad_updates;
   p.reference = m.reference;
+  p.views = m.views;
   p.obs.resize(m.patches.size());
   for (std::size_t i = 0; i < m.patches.size(); ++i) convert(m.patches[i], p.obs[i]);
 }
@@ -266,6 +274,7 @@ livo::visual_point_t toMsg(const VisualPoint& p) {
   m.converged = p.converged;
   m.bad_updates = p.bad_updates;
   m.reference = p.reference;
+  m.views = std::max(p.views, static_cast<std::int32_t>(p.obs.size()));
   m.num_patches = static_cast<std::int32_t>(p.obs.size());
   m.patches.reserve(p.obs.size());
   for (const auto& o : p.obs) m.patches.push_back(toMsg(o));

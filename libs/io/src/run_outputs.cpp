@@ -110,7 +110,11 @@ void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std
     writeSummary(os, "total", summarize(ft.total), true);
     os << "  },\n  \"peak_rss_mb\": " << num(peak_rss_mb) << ",\n  \"map\": {\"local_voxels\": " << map.local_voxels
        << ", \"visual_points_local\": " << map.visual_points_local
-       << ", \"visual_points_longterm\": " << map.visual_points_longterm << ", \"bytes\": " << map.bytes << "}";
+       << ", \"visual_points_longterm\": " << map.visual_points_longterm << ", \"bytes\": " << map.bytes;
+    if (map.has_parts)
+      os << ", \"bytes_lidar\": " << map.bytes_lidar << ", \"bytes_visual_local\": " << map.bytes_visual_local
+         << ", \"bytes_visual_longterm\": " << map.bytes_visual_longterm << ", \"bytes_index\": " << map.bytes_index;
+    os << "}";
     if (!counters.empty()) {
       os << ",\n  \"counters\": {";
       bool first = true;

@@ -132,6 +132,7 @@ bool DualVisualMap::appendObservation(std::int64_t id, const VisualObservation& 
   }
   if (p == nullptr || p->converged) return false;
   p->obs.push_back(obs);
+  ++p->views;
   p->last_seen = std::max(p->last_seen, obs.utime);
   ++added_observations_;
   owner->refine(*p, lidar);

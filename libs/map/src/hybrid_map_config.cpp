@@ -33,6 +33,8 @@ void checkFields(const HybridMapConfig& c, const std::function<void(const char*,
         "must be in (0, cap_high_water)");
   check(c.recount_interval >= 1, "recount_interval", "must be >= 1");
   check(c.longterm_points_per_voxel >= 0, "longterm_points_per_voxel", "must be >= 0 (0 = no limit)");
+  check(c.longterm_min_observations >= 1 && c.longterm_min_observations <= 1000, "longterm_min_observations",
+        "must be in [1, 1000]");
   check(c.tile_edge_m > 0.0 && c.tile_edge_m < 1e4, "tile_edge_m", "must be in (0, 1e4) m");
   check(c.max_removals_per_update >= 0, "max_removals_per_update", "must be >= 0 (0 = unlimited)");
 }
@@ -47,6 +49,7 @@ void HybridMapConfig::load(const ConfigNode& node) {
   node.get("longterm_slide_m", longterm_slide_m);
   node.get("longterm_reference_only", longterm_reference_only);
   node.get("longterm_points_per_voxel", longterm_points_per_voxel);
+  node.get("longterm_min_observations", longterm_min_observations);
   node.get("memory_cap_mb", memory_cap_mb);
   node.get("cap_high_water", cap_high_water);
   node.get("cap_low_water", cap_low_water);

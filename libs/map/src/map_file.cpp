@@ -4,6 +4,8 @@
 
 #include "map_file_codec.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -19,7 +21,10 @@ using namespace map_codec;
 namespace {
 
 constexpr char kMagic[8] = {'L', 'I', 'V', 'O', 'M', 'A', 'P', '1'};
-constexpr std::uint32_t kVersion = 1;
+// Version 2: patch samples as bytes (PatchPyramid) and each point's view count. Version 1 (float
+// samples, no view count: taken as the observations it holds) is still read.
+constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kFloatPatchVersion = 1;
 constexpr std::uint64_t kMaxVisualPoints = 50'000'000;
 constexpr std::uint32_t kMaxObservations = 10'000;
 
@@ -49,6 +54,7 @@ void putVisualPoint(std::ostream& os, const VisualPoint& p) {
     for (int c = 0; c < 3; ++c) put(os, p.cov(r, c));
   put(os, std::int32_t(p.reference)); put(os, std::uint8_t(p.converged)); put(os, std::int32_t(p.bad_updates));
   put(os, p.last_seen);
+  put(os, std::int32_t(std::max(p.views, std::int32_t(p.obs.size()))));
   put(os, std::uint32_t(p.obs.size()));
   for (const VisualObservation& o : p.obs) {
     put(os, o.utime);
@@ -59,7 +65,20 @@ void putVisualPoint(std::ostream& os, const VisualPoint& p) {
   }
 }
 
-VisualPoint getVisualPoint(std::istream& is) {
+void getPatch(std::istream& is, std::uint32_t version, PatchPyramid& patch) {
+  if (version != kFloatPatchVersion) {
+    patch.values = get<decltype(patch.values)>(is, "patch");
+    return;
+  }
+  const auto values = get<std::array<float, PatchPyramid::kValues>>(is, "patch");
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!(values[i] >= -0.5f && values[i] <= 255.5f))
+      throw std::runtime_error("patch sample " + std::to_string(values[i]) + " is not a gray value");
+    patch.values[i] = PatchPyramid::quantize(values[i]);
+  }
+}
+
+VisualPoint getVisualPoint(std::istream& is, std::uint32_t version) {
   VisualPoint p;
   p.id = get<std::int64_t>(is, "visual point id");
   p.p_world = getVec3(is, "visual point position");
@@ -70,14 +89,18 @@ VisualPoint getVisualPoint(std::istream& is) {
   p.converged = get<std::uint8_t>(is, "converged flag") != 0;
   p.bad_updates = get<std::int32_t>(is, "bad update count");
   p.last_seen = get<Utime>(is, "last seen time");
+  if (version != kFloatPatchVersion) p.views = get<std::int32_t>(is, "view count");
   const auto n = get<std::uint32_t>(is, "observation count");
   if (n > kMaxObservations) throw std::runtime_error("observation count " + std::to_string(n) + " over the limit");
   if (p.reference < -1 || p.reference >= std::int32_t(n))
     throw std::runtime_error("reference index " + std::to_string(p.reference) + " outside the observations");
+  if (version == kFloatPatchVersion) p.views = std::int32_t(n);  // not stored: what the file holds
+  if (p.views < std::int32_t(n))
+    throw std::runtime_error("view count " + std::to_string(p.views) + " below the observation count " + std::to_string(n));
   p.obs.resize(n);
   for (VisualObservation& o : p.obs) {
     o.utime = get<Utime>(is, "observation time");
-    o.patch.values = get<decltype(o.patch.values)>(is, "patch");
+    getPatch(is, version, o.patch);
     o.T_world_camera = getPose(is);
     o.px.x() = getFinite(is, "observation pixel");
     o.px.y() = getFinite(is, "observation pixel");
@@ -92,11 +115,11 @@ void saveVisual(std::ostream& os, const VisualMap& m) {
   m.forEach([&os](const VisualPoint& p) { putVisualPoint(os, p); });
 }
 
-std::size_t loadVisual(std::istream& is, VisualMap& m) {
+std::size_t loadVisual(std::istream& is, std::uint32_t version, VisualMap& m) {
   const auto n = get<std::uint64_t>(is, "visual point count");
   if (n > kMaxVisualPoints) throw std::runtime_error("visual point count " + std::to_string(n) + " over the limit");
   for (std::uint64_t i = 0; i < n; ++i) {
-    if (!m.insert(std::make_unique<VisualPoint>(getVisualPoint(is))))
+    if (!m.insert(std::make_unique<VisualPoint>(getVisualPoint(is, version))))
       throw std::runtime_error("visual point " + std::to_string(i) + ": duplicate id or bad position");
   }
   return std::size_t(n);
@@ -114,12 +137,12 @@ void saveContent(std::ostream& os, const HybridMap& map) {
 
 // Counters, cube centres and pending slide work are not part of it: the first update() after loading
 // centres the cubes at the robot again (and, with a cap, makes an exact byte count).
-void loadContent(std::istream& is, HybridMap& map) {
+void loadContent(std::istream& is, std::uint32_t version, HybridMap& map) {
   map.clear();
   try {
     map.lidar().load(is);
-    loadVisual(is, map.visual().local());
-    loadVisual(is, map.visual().longterm());
+    loadVisual(is, version, map.visual().local());
+    loadVisual(is, version, map.visual().longterm());
   } catch (...) {
     map.clear();
     throw;
@@ -170,8 +193,9 @@ MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
     if (!is.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
       throw std::runtime_error("not a livo map file (bad magic)");
     const auto version = get<std::uint32_t>(is, "version");
-    if (version != kVersion)
-      throw std::runtime_error("version " + std::to_string(version) + ", this build reads " + std::to_string(kVersion));
+    if (version != kVersion && version != kFloatPatchVersion)
+      throw std::runtime_error("version " + std::to_string(version) + ", this build reads " +
+                               std::to_string(kFloatPatchVersion) + " and " + std::to_string(kVersion));
     const double vs = get<double>(is, "voxel size");
     const double vvs = get<double>(is, "visual voxel size");
     const double cfg_vs = map.lidar().voxels().config().voxel_size_m;
@@ -179,7 +203,7 @@ MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
     if (vs != cfg_vs || vvs != cfg_vvs)
       throw std::runtime_error("written with voxel sizes " + std::to_string(vs) + " / " + std::to_string(vvs) +
                                " m, configured " + std::to_string(cfg_vs) + " / " + std::to_string(cfg_vvs) + " m");
-    loadContent(is, map);
+    loadContent(is, version, map);
     if (is.peek() != std::char_traits<char>::eof()) throw std::runtime_error("trailing bytes after the map");
   } catch (const std::exception& e) {
     map.clear();

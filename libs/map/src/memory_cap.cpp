@@ -51,15 +51,17 @@ void MemoryCap::enforce(const Vec3& robot, WorkBudget& budget, MapWork& work) {
     plan(robot, work, estimate(work) - low);
   }
   evict(budget, work, 0.0);
-  // Hard limit: over the cap itself, evict beyond the budget down to the high-water mark (the margin
-  // covers the estimate's bias: far root voxels are lighter than the average used for them).
+  // Hard limit: over the cap itself, evict beyond the budget down to the low-water mark (the margin
+  // covers the estimate's bias: far root voxels are lighter than the average used for them; with the
+  // patches as bytes the root voxels are most of the bytes, and the high-water mark left the exact
+  // count 3 % over the cap in HybridMap.EvictionIsSpreadOverUpdatesWithinTheBudgetBelowTheCap).
   for (int round = 0; round < 2 && estimate(work) > cap; ++round) {
     if (evict_cursor_ >= pending_evictions_.size()) {
       ++work.total.eviction_events;
       plan(robot, work, estimate(work) - low);
     }
     WorkBudget unlimited = WorkBudget::none();
-    evict(unlimited, work, high);
+    evict(unlimited, work, low);
   }
 }
 

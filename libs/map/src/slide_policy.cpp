@@ -22,7 +22,8 @@ SlidePolicy::SlidePolicy(const HybridMapConfig& config)
       longterm_slide_m_(config.longterm_slide_m),
       longterm_reference_only_(config.longterm_reference_only),
       longterm_enabled_(config.longterm_enabled),
-      longterm_per_voxel_(config.longterm_points_per_voxel) {}
+      longterm_per_voxel_(config.longterm_points_per_voxel),
+      longterm_min_obs_(config.longterm_min_observations) {}
 
 bool SlidePolicy::outsideLocal(const Vec3& c) const { return outsideCube(c, local_center_, 0.5 * local_edge_m_); }
 
@@ -81,9 +82,10 @@ bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
   const Vec3 c = local.keyOf(q->p_world).center(local.config().voxel_size_m);
   if (!outsideLocal(c)) return false;  // judged again: the cube may have moved since the list was made
   std::unique_ptr<VisualPoint> p = local.extract(id);
-  // Only points with a patch are worth keeping; beyond the long-term cube (or without a long-term
-  // map) nothing is kept.
-  if (!longterm_enabled_ || p->referenceObs() == nullptr || outsideLongterm(c) || longtermVoxelFull(*p, work)) {
+  // Only points with a patch, seen often enough, are worth keeping; beyond the long-term cube (or
+  // without a long-term map) nothing is kept.
+  if (!longterm_enabled_ || p->referenceObs() == nullptr || p->views < longterm_min_obs_ ||
+      outsideLongterm(c) || longtermVoxelFull(*p, work)) {
     ++work.rep.deleted_points;
     ++work.total.deleted_points;
     return true;

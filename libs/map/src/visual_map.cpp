@@ -234,6 +234,7 @@ int VisualMap::addPoints(const Image& gray, const CameraModel& cam, const Pose& 
     point->cov = c.cov_world;
     point->obs.reserve(1);
     point->obs.push_back(o);
+    point->views = 1;
     point->reference = 0;
     point->last_seen = t;
     VisualPoint* raw = point.get();

@@ -59,6 +59,7 @@ bool VisualMap::addObservation(VisualPoint& p, const Image& gray, const Pose& T_
     p.obs.reserve(std::max(p.obs.size() + 1, std::min(2 * p.obs.size(), cap_limit)));
   }
   p.obs.push_back(o);
+  ++p.views;
   if (p.reference < 0 || p.reference >= int(p.obs.size())) p.reference = int(p.obs.size()) - 1;
 
   // Too many: drop the lowest-scoring observation other than the reference and the new one.

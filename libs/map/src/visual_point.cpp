@@ -69,10 +69,12 @@ bool extractPatchPyramid(const Image& gray, const Vec2& px, PatchPyramid& out) {
     double xs[C], ys[C];
     for (int c = 0; c < C; ++c) xs[c] = px.x() + (double(c) - 0.5 * (C - 1)) * stride;
     for (int r = 0; r < C; ++r) ys[r] = px.y() + (double(r) - 0.5 * (C - 1)) * stride;
-    float* level = &out.at(l, 0, 0);
+    float level[C * C];
     sampleBilinearGrid(gray, xs, C, ys, C, level);
-    for (int k = 0; k < C * C; ++k)
+    for (int k = 0; k < C * C; ++k) {
       if (std::isnan(level[k])) return false;
+      out.set(l, k / C, k % C, level[k]);
+    }
   }
   return true;
 }

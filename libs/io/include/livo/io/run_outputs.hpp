@@ -5,7 +5,9 @@
 //                   the map's accounted bytes after the frame, 0 when unknown, e.g. livo-exporter)
 //   stats.json      frames, visual_frames, degenerate_frames, timed_frames, timing_ms {lio, vio,
 //                   vio_per_visual_frame, map, total} x {mean, median, p95, max}, peak_rss_mb, map
-//                   {local_voxels, visual_points_local, visual_points_longterm, bytes}, plus
+//                   {local_voxels, visual_points_local, visual_points_longterm, bytes, and where the
+//                   map is in the process (livo-run) its parts bytes_lidar, bytes_visual_local,
+//                   bytes_visual_longterm, bytes_index}, plus
 //                   run-specific counters. Timing statistics cover the frames after initialisation
 //                   (timed_frames: those with a pose); vio_per_visual_frame only the frames that ran
 //                   the visual update (vio averages over every timed frame, zeros included).
@@ -48,6 +50,9 @@ struct MapSummary {
   std::uint64_t visual_points_local = 0;
   std::uint64_t visual_points_longterm = 0;
   std::uint64_t bytes = 0;
+  /// The parts of `bytes` (HybridMapStats), written when has_parts (livo-exporter sees only the total).
+  bool has_parts = false;
+  std::uint64_t bytes_lidar = 0, bytes_visual_local = 0, bytes_visual_longterm = 0, bytes_index = 0;
 };
 
 class RunOutputs {

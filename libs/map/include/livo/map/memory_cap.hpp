@@ -39,7 +39,7 @@ class MemoryCap {
   /// below it.
   void evict(WorkBudget& budget, MapWork& work, double stop_below);
   /// Over the high-water mark, plans an eviction (unless one is under way) and starts it with what is
-  /// left of the budget; over the cap itself, evicts beyond the budget down to the high-water mark.
+  /// left of the budget; over the cap itself, evicts beyond the budget down to the low-water mark.
   void enforce(const Vec3& robot, WorkBudget& budget, MapWork& work);
 
   /// Victims left to evict.

@@ -2,8 +2,8 @@
 //   - local cube: edge local_edge_m, centred on the robot position of the last slide; a slide happens
 //     once the robot is slide_distance_m from that position (Euclidean). LiDAR root voxels whose centre
 //     leaves the cube are deleted; local visual points whose visual voxel centre leaves it move to the
-//     long-term map (only points with a reference patch, keeping only that reference when
-//     longterm_reference_only; the others are dropped); long-term points whose voxel centre is inside
+//     long-term map (only points with a reference patch and longterm_min_observations observations,
+//     keeping only that reference when longterm_reference_only; the others are dropped); long-term points whose voxel centre is inside
 //     the new local cube move back (revisits).
 //   - long-term cube: edge longterm_edge_m, slid every longterm_slide_m; long-term points leaving it are
 //     deleted.
@@ -59,6 +59,7 @@ class SlidePolicy {
   bool longterm_reference_only_;
   bool longterm_enabled_;
   int longterm_per_voxel_;
+  int longterm_min_obs_;  ///< HybridMapConfig::longterm_min_observations
 
   bool started_ = false;
   Vec3 local_center_ = Vec3::Zero();

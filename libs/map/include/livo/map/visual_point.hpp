@@ -18,19 +18,31 @@ using Vec2 = Eigen::Vector2d;
 /// stride 2^l pixels centred on the point's pixel: the patch proper is kSize x kSize samples, and the
 /// crop keeps kMargin extra samples on every side so that a reference patch can be resampled under a
 /// moderate affine warp without the original image.
+/// Storage: one byte per sample, the bilinear value rounded to the nearest gray level (the images are
+/// 8-bit: the rounding adds at most half a gray level, a variance of 1/12 against the pixel noise's),
+/// 432 bytes per pyramid instead of 1728 as floats: the visual maps' patches are most of their bytes.
 struct PatchPyramid {
   static constexpr int kLevels = 3;
   static constexpr int kSize = 8;    ///< patch side, samples
   static constexpr int kMargin = 2;  ///< extra samples per side for warping
   static constexpr int kCrop = kSize + 2 * kMargin;  ///< crop side, samples (12)
   static constexpr int kCropValues = kCrop * kCrop;
-  std::array<float, kLevels * kCropValues> values{};  ///< level-major, row-major gray values
+  static constexpr int kValues = kLevels * kCropValues;  ///< 432
+  std::array<std::uint8_t, kValues> values{};  ///< level-major, row-major gray values
 
-  float at(int level, int row, int col) const { return values[std::size_t(level * kCropValues + row * kCrop + col)]; }
-  float& at(int level, int row, int col) { return values[std::size_t(level * kCropValues + row * kCrop + col)]; }
+  float at(int level, int row, int col) const { return float(values[index(level, row, col)]); }
+  /// Stores `v` rounded to the nearest gray level, clamped to [0, 255] (NaN stores 0).
+  void set(int level, int row, int col, float v) { values[index(level, row, col)] = quantize(v); }
+  static std::uint8_t quantize(float v) {
+    if (!(v > 0.f)) return 0;
+    return v >= 254.5f ? std::uint8_t(255) : static_cast<std::uint8_t>(v + 0.5f);
+  }
   /// Bilinear sample at a position in level-`level` sample units relative to the crop centre (the
   /// point's pixel); false when it falls outside the crop.
   bool sample(int level, double dx, double dy, float& out) const;
+
+ private:
+  static std::size_t index(int level, int row, int col) { return std::size_t(level * kCropValues + row * kCrop + col); }
 };
 
 /// Sample offsets of the patch proper in level units: -kSize/2 + 0.5 ... kSize/2 - 0.5 (centred).
@@ -65,6 +77,9 @@ struct VisualPoint {
   int reference = -1;            ///< index into obs of the reference patch (-1: none)
   bool converged = false;        ///< normal converged: only the reference is kept
   int bad_updates = 0;           ///< consecutive updates with a high photometric error
+  /// Observations ever stored (obs may hold fewer: dropped beyond max_observations, only the reference
+  /// kept once converged or in the long-term map); map.longterm_min_observations judges this count.
+  std::int32_t views = 0;
   Utime last_seen = 0;
 
   const VisualObservation* referenceObs() const {
