@@ -1,4 +1,4 @@
-// Shared scene builders for the hybrid-map tests (test_map_hybrid*.cpp).
+// Shared scene builders for the hybrid-map tests (test_map_hybrid*.cpp, test_map_file.cpp).
 #pragma once
 
 #include "livo/map/hybrid_map.hpp"

@@ -5,7 +5,6 @@
 // long drive and slide timing: test_map_hybrid_drive.cpp.
 #include "livo/common/timing.hpp"
 #include "livo/map/hybrid_map.hpp"
-#include "livo/map/map_file.hpp"
 #include "livo/sensors/camera_model.hpp"
 #include "map_hybrid_test_util.hpp"
 
@@ -13,12 +12,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <iostream>
 #include <map>
 #include <random>
 #include <set>
-#include <sstream>
 #include <tuple>
 
 using namespace livo;
@@ -151,6 +148,16 @@ SlideModel modelOf(const Scene& sc) {
   return m;
 }
 
+// Two maps of the same scene slid along the same short path (the long-term rules' comparisons).
+void fillAndSlideBoth(HybridMap& a, HybridMap& b) {
+  fillScene(a, 7);
+  fillScene(b, 7);
+  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
+    a.update(robot);
+    b.update(robot);
+  }
+}
+
 }  // namespace
 
 TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
@@ -217,12 +224,7 @@ TEST(HybridMap, LongtermPointsPerVoxelCapsTheLongtermMap) {
   capped_cfg.longterm_points_per_voxel = 1;
   HybridMap free_map(smallConfig(), voxels1m(), VisualMapConfig{});
   HybridMap capped(capped_cfg, voxels1m(), VisualMapConfig{});
-  fillScene(free_map, 7);
-  fillScene(capped, 7);
-  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
-    free_map.update(robot);
-    capped.update(robot);
-  }
+  fillAndSlideBoth(free_map, capped);
   const VisualMap& lt = capped.visual().longterm();
   std::map<VoxelKey, int, bool (*)(const VoxelKey&, const VoxelKey&)> per_voxel(
       [](const VoxelKey& a, const VoxelKey& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
@@ -243,12 +245,7 @@ TEST(HybridMap, LongtermMinObservationsKeepsOnlyPointsSeenOftenEnough) {
   strict_cfg.longterm_min_observations = 3;
   HybridMap all(smallConfig(), voxels1m(), VisualMapConfig{});
   HybridMap strict(strict_cfg, voxels1m(), VisualMapConfig{});
-  fillScene(all, 7);
-  fillScene(strict, 7);
-  for (const Vec3& robot : {Vec3(0, 0, 0), Vec3(6, 1, 0), Vec3(13, -4, 0)}) {
-    all.update(robot);
-    strict.update(robot);
-  }
+  fillAndSlideBoth(all, strict);
   std::set<std::int64_t> want;
   for (std::int64_t id : ids(all.visual().longterm()))
     if (1 + id % 4 >= 3) want.insert(id);
@@ -547,62 +544,4 @@ TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
   std::cout << "bytes: lidar " << s.bytes_lidar << " (" << double(s.bytes_lidar) / double(s.local_voxels)
             << " per root voxel), visual local " << s.bytes_visual_local << ", long-term " << s.bytes_visual_longterm
             << ", index " << s.bytes_index << "\n";
-}
-
-// Map files of version 1 stored patch samples as floats; they load into today's byte samples rounded.
-// The oracle: a version-2 file of the same map with the header's version and the one patch rewritten.
-TEST(HybridMap, MapFileOfVersionOneLoadsWithItsPatchesRounded) {
-  HybridMap map(smallConfig(), voxels1m(), VisualMapConfig{});
-  auto vp = visualPoint(42, Vec3(1, 2, 3));
-  for (int i = 0; i < PatchPyramid::kValues; ++i) vp->obs[0].patch.values[std::size_t(i)] = std::uint8_t((i * 7 + 3) % 251);
-  const PatchPyramid stored = vp->obs[0].patch;
-  ASSERT_TRUE(map.visual().local().insert(std::move(vp)));
-  std::ostringstream v2;
-  saveMap(v2, map);
-  std::string bytes = v2.str();
-  const std::string patch(reinterpret_cast<const char*>(stored.values.data()), stored.values.size());
-  const std::size_t at = bytes.find(patch);
-  ASSERT_NE(at, std::string::npos);
-  ASSERT_EQ(bytes.find(patch, at + 1), std::string::npos) << "the patch must be found once";
-  std::string floats(std::size_t(PatchPyramid::kValues) * sizeof(float), '\0');
-  for (int i = 0; i < PatchPyramid::kValues; ++i) {
-    // Off by up to 0.4 from the gray level, both ways: rounding must give it back.
-    const float v = float(stored.values[std::size_t(i)]) + (i % 2 ? 0.4f : -0.4f) * float(stored.values[std::size_t(i)] > 0);
-    std::memcpy(&floats[std::size_t(i) * sizeof(float)], &v, sizeof(float));
-  }
-  // Version 1 has no view count: the int32 before the observation count (uint32) and its utime (int64).
-  const std::size_t views_at = at - 8 - 4 - 4;
-  std::string v1 = bytes.substr(0, views_at) + bytes.substr(views_at + 4, at - views_at - 4) + floats +
-                   bytes.substr(at + patch.size());
-  const std::uint32_t one = 1;
-  std::memcpy(&v1[8], &one, sizeof(one));  // after the 8-byte magic
-  HybridMap loaded(smallConfig(), voxels1m(), VisualMapConfig{});
-  std::istringstream in(v1);
-  loadMap(in, "v1", loaded);
-  const VisualPoint* p = loaded.visual().local().find(42);
-  ASSERT_NE(p, nullptr);
-  EXPECT_TRUE(p->obs[0].patch.values == stored.values);
-  EXPECT_EQ(p->views, 1);  // version 1: the observations it holds
-  // A version-1 patch sample that is no gray value is refused with the reason.
-  std::string bad = v1;
-  const float junk = 900.f;
-  std::memcpy(&bad[at - 4 + 5 * sizeof(float)], &junk, sizeof(float));
-  std::istringstream bad_in(bad);
-  try {
-    loadMap(bad_in, "bad", loaded);
-    ADD_FAILURE() << "a sample of 900 must be refused";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("not a gray value"), std::string::npos) << e.what();
-  }
-  // Versions this build does not know are refused, naming both it reads.
-  std::string v3 = bytes;
-  const std::uint32_t three = 3;
-  std::memcpy(&v3[8], &three, sizeof(three));
-  std::istringstream v3_in(v3);
-  try {
-    loadMap(v3_in, "v3", loaded);
-    ADD_FAILURE() << "version 3 must be refused";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("reads 1 and 2"), std::string::npos) << e.what();
-  }
 }

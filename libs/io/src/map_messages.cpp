@@ -55,7 +55,7 @@ Validation checkPatch(const livo::patch_t& m, const MessageLimits& lim) {
   LIVO_MSG_CHECK(size(m.values, m.num_values, "values", "num_values"));
   LIVO_MSG_CHECK(finite(m.values.data(), m.num_values, "values"));
   for (std::size_t i = 0; i < m.values.size(); ++i)
-    if (!(m.values[i] >= -0.5f && m.values[i] <= 255.5f))
+    if (!PatchPyramid::isGrayValue(m.values[i]))
       return Validation::fail("values[" + std::to_string(i) + "]: expected a gray value in [0, 255], got " + num(m.values[i]));
   LIVO_MSG_CHECK(pose7(m.T_world_camera, "T_world_camera"));
   LIVO_MSG_CHECK(finite(m.pixel, 2, "pixel"));
@@ -274,7 +274,7 @@ livo::visual_point_t toMsg(const VisualPoint& p) {
   m.converged = p.converged;
   m.bad_updates = p.bad_updates;
   m.reference = p.reference;
-  m.views = std::max(p.views, static_cast<std::int32_t>(p.obs.size()));
+  m.views = p.viewCount();
   m.num_patches = static_cast<std::int32_t>(p.obs.size());
   m.patches.reserve(p.obs.size());
   for (const auto& o : p.obs) m.patches.push_back(toMsg(o));

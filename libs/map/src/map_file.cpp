@@ -54,8 +54,8 @@ void putVisualPoint(std::ostream& os, const VisualPoint& p) {
     for (int c = 0; c < 3; ++c) put(os, p.cov(r, c));
   put(os, std::int32_t(p.reference)); put(os, std::uint8_t(p.converged)); put(os, std::int32_t(p.bad_updates));
   put(os, p.last_seen);
-  put(os, std::int32_t(std::max(p.views, std::int32_t(p.obs.size()))));
   put(os, std::uint32_t(p.obs.size()));
+  put(os, p.viewCount());
   for (const VisualObservation& o : p.obs) {
     put(os, o.utime);
     put(os, o.patch.values);
@@ -72,7 +72,7 @@ void getPatch(std::istream& is, std::uint32_t version, PatchPyramid& patch) {
   }
   const auto values = get<std::array<float, PatchPyramid::kValues>>(is, "patch");
   for (std::size_t i = 0; i < values.size(); ++i) {
-    if (!(values[i] >= -0.5f && values[i] <= 255.5f))
+    if (!PatchPyramid::isGrayValue(values[i]))
       throw std::runtime_error("patch sample " + std::to_string(values[i]) + " is not a gray value");
     patch.values[i] = PatchPyramid::quantize(values[i]);
   }
@@ -89,12 +89,12 @@ VisualPoint getVisualPoint(std::istream& is, std::uint32_t version) {
   p.converged = get<std::uint8_t>(is, "converged flag") != 0;
   p.bad_updates = get<std::int32_t>(is, "bad update count");
   p.last_seen = get<Utime>(is, "last seen time");
-  if (version != kFloatPatchVersion) p.views = get<std::int32_t>(is, "view count");
   const auto n = get<std::uint32_t>(is, "observation count");
   if (n > kMaxObservations) throw std::runtime_error("observation count " + std::to_string(n) + " over the limit");
   if (p.reference < -1 || p.reference >= std::int32_t(n))
     throw std::runtime_error("reference index " + std::to_string(p.reference) + " outside the observations");
-  if (version == kFloatPatchVersion) p.views = std::int32_t(n);  // not stored: what the file holds
+  p.views = version == kFloatPatchVersion ? std::int32_t(n)  // not stored: what the file holds
+                                          : get<std::int32_t>(is, "view count");
   if (p.views < std::int32_t(n))
     throw std::runtime_error("view count " + std::to_string(p.views) + " below the observation count " + std::to_string(n));
   p.obs.resize(n);

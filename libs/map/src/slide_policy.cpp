@@ -84,7 +84,7 @@ bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
   std::unique_ptr<VisualPoint> p = local.extract(id);
   // Only points with a patch, seen often enough, are worth keeping; beyond the long-term cube (or
   // without a long-term map) nothing is kept.
-  if (!longterm_enabled_ || p->referenceObs() == nullptr || p->views < longterm_min_obs_ ||
+  if (!longterm_enabled_ || p->referenceObs() == nullptr || p->viewCount() < longterm_min_obs_ ||
       outsideLongterm(c) || longtermVoxelFull(*p, work)) {
     ++work.rep.deleted_points;
     ++work.total.deleted_points;

@@ -6,6 +6,7 @@
 #include "livo/common/so3.hpp"
 #include "livo/common/types.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -33,6 +34,8 @@ struct PatchPyramid {
   float at(int level, int row, int col) const { return float(values[index(level, row, col)]); }
   /// Stores `v` rounded to the nearest gray level, clamped to [0, 255] (NaN stores 0).
   void set(int level, int row, int col, float v) { values[index(level, row, col)] = quantize(v); }
+  /// A sample a patch can hold: a gray value in [0, 255] up to rounding (NaN is not).
+  static bool isGrayValue(float v) { return v >= -0.5f && v <= 255.5f; }
   static std::uint8_t quantize(float v) {
     if (!(v > 0.f)) return 0;
     return v >= 254.5f ? std::uint8_t(255) : static_cast<std::uint8_t>(v + 0.5f);
@@ -80,6 +83,8 @@ struct VisualPoint {
   /// Observations ever stored (obs may hold fewer: dropped beyond max_observations, only the reference
   /// kept once converged or in the long-term map); map.longterm_min_observations judges this count.
   std::int32_t views = 0;
+  /// views, or the observations held where that is more (a point built without counting them).
+  std::int32_t viewCount() const { return std::max(views, static_cast<std::int32_t>(obs.size())); }
   Utime last_seen = 0;
 
   const VisualObservation* referenceObs() const {
