@@ -118,10 +118,12 @@ TEST_F(RemoteRoom, SameTrajectoryAsTheSingleProcess) {
             << ", mean planes per submap " << double(client.plane_count) / double(client.queries) << "\n";
   EXPECT_EQ(r.timeouts, 0u);
   EXPECT_GT(r.visual_frames, 10u) << "the visual update runs through the map server too";
-  // Measured (2026-12-02): max position difference 0.0195 mm (the planes the split estimator sees lag
-  // the single process's by nothing in lock step; floating-point order and the visual grid merge
-  // differ), ATE 0.3304 cm single, 0.3302 cm remote. Bounds about twice that.
-  EXPECT_LE(diff, 4e-5) << "split and single-process runs agree";
+  // Measured (2026-12-02, patches as bytes): max position difference 0.458 mm (the planes the split
+  // estimator sees lag the single process's by nothing in lock step; floating-point order and the
+  // visual grid merge differ, and with patch samples rounded to gray levels such a difference can flip
+  // a sample by one level: 0.0195 mm with float patches), ATE 0.3322 cm single, 0.3308 cm remote.
+  // Bounds about twice that.
+  EXPECT_LE(diff, 9e-4) << "split and single-process runs agree";
   EXPECT_LE(std::abs(ate_remote - ate_single), 4e-5);
   EXPECT_LE(ate_remote, 0.007);
   // The map server holds what the single process would: visual points were created remotely.

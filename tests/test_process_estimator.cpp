@@ -84,7 +84,10 @@ TEST(EstimatorOverMemq, RoundTripGivesTheSingleProcessTrajectory) {
   }
   std::cout << "memq round trip: " << out.odom.size() << " poses, max difference to the single process " << worst * 1e3
             << " mm\n" << est.summary() << server.summary();
-  EXPECT_LE(worst, 5e-6);  // measured 0.0026 mm (2026-12-01); about twice that
+  // Measured 0.27 mm (2026-12-02; 0.0026 mm on 2026-12-01 with float patches): patch samples are rounded
+  // to whole gray levels, so a floating-point-order difference in a pixel position can flip one sample
+  // by a level, which the visual update then follows. About twice that.
+  EXPECT_LE(worst, 5.5e-4);
   EXPECT_EQ(est.counters().timeouts, 0u);
   EXPECT_EQ(est.counters().late_submaps, 0u);
   EXPECT_EQ(out.stats.size(), sf.frames.size());
