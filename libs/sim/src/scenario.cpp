@@ -2,6 +2,7 @@
 
 #include "livo/common/so3.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -54,6 +55,8 @@ void CameraSimConfig::load(const ConfigNode& n) {
   n.get("fx", fx).get("fy", fy).get("cx", cx).get("cy", cy).get("distortion", distortion);
   n.get("max_angle_deg", max_angle_deg).get("rate_hz", rate_hz).get("phase_s", phase_s);
   n.get("exposure_jitter", exposure_jitter).get("pixel_noise", pixel_noise).get("dropouts_s", dropouts_s);
+  n.get("exposure_time_s", exposure_time_s).get("exposure_steps", exposure_steps).get("vignetting", vignetting);
+  n.get("stamp_delay_s", stamp_delay_s);
 }
 
 Eigen::Isometry3d ExtrinsicsConfig::defaultCamera() {
@@ -186,6 +189,20 @@ void SimScenario::validate() const {
     check(c.phase_s >= 0.0, "camera.phase_s", "must be >= 0");
     check(c.exposure_jitter >= 0.0 && c.exposure_jitter <= 1.0, "camera.exposure_jitter", "must be in [0, 1]");
     check(c.pixel_noise >= 0.0 && c.pixel_noise <= 100.0, "camera.pixel_noise", "must be in [0, 100]");
+    // The exposure cannot outlast the frame interval.
+    check(std::isfinite(c.exposure_time_s) && c.exposure_time_s >= 0.0 && c.exposure_time_s < 1.0 / c.rate_hz,
+          "camera.exposure_time_s", "must be >= 0 and shorter than the frame interval 1 / rate_hz");
+    check(c.exposure_steps.size() % 2 == 0, "camera.exposure_steps", "must be pairs [t, factor, t, factor, ...]");
+    for (std::size_t i = 0; i + 1 < c.exposure_steps.size(); i += 2) {
+      check(std::isfinite(c.exposure_steps[i]) && c.exposure_steps[i] >= 0.0 &&
+                (i == 0 || c.exposure_steps[i] > c.exposure_steps[i - 2]),
+            "camera.exposure_steps", "times must be >= 0 and increasing (seconds from the start)");
+      check(std::isfinite(c.exposure_steps[i + 1]) && c.exposure_steps[i + 1] > 0.0 && c.exposure_steps[i + 1] <= 100.0,
+            "camera.exposure_steps", "every factor must be in (0, 100]");
+    }
+    check(c.vignetting >= 0.0 && c.vignetting < 1.0, "camera.vignetting", "must be in [0, 1)");
+    check(std::isfinite(c.stamp_delay_s) && c.stamp_delay_s >= 0.0 && c.stamp_delay_s <= std::min(0.1, 0.5 / c.rate_hz),
+          "camera.stamp_delay_s", "must be in [0, min(0.1 s, half the frame interval)]");
   }
 }
 

@@ -55,6 +55,7 @@ Utime Simulator::lidarUtime(std::int64_t j) const {
 Utime Simulator::cameraUtime(std::int64_t k) const {
   return start_ + static_cast<Utime>(std::llround((sc_.camera.phase_s + static_cast<double>(k) / sc_.camera.rate_hz) * 1e6));
 }
+Utime Simulator::cameraStamp(std::int64_t k) const { return cameraUtime(k) + fromSeconds(sc_.camera.stamp_delay_s); }
 
 void Simulator::exactImu(double t, Vec3& gyro, Vec3& accel) const {
   const BodyState s = traj_.state(t);
@@ -190,41 +191,36 @@ void Simulator::traceRays(std::int64_t j, double t0, const std::vector<LidarRay>
   }
 }
 
-Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
+int Simulator::blurSamples(std::int64_t k) const {
+  const double T = sc_.camera.exposure_time_s;
+  if (!(T > 0.0)) return 1;
+  const double t = relTime(cameraUtime(k));
+  const Pose a = T_world_camera(start_ + fromSeconds(t - 0.5 * T)), b = T_world_camera(start_ + fromSeconds(t + 0.5 * T));
+  const double angle = Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+  const double metres = (b.translation() - a.translation()).norm();  // seen at 1 m
+  const double px = (angle + metres) * std::max(sc_.camera.fx, sc_.camera.fy);
+  return static_cast<int>(std::clamp(std::ceil(px), 1.0, 64.0));  // at most a pixel between samples
+}
+
+void Simulator::accumulateRadiance(const Pose& T_wc, double weight, std::vector<double>& acc) const {
   const SimCameraModel& cam = *camera_;
-  Image img;
-  img.utime = cameraUtime(k);
-  img.width = cam.width();
-  img.height = cam.height();
-  img.row_stride = img.width;
-  img.format = PixelFormat::Gray8;
-  img.exposure_time_s = 0.f;  // unknown: the estimator estimates the exposure
-  img.data.assign(static_cast<std::size_t>(img.width) * img.height, 0);
-  const Pose T_wc = T_world_camera(img.utime);
-  // Exposure jitter: a per-frame multiplicative gain, log-normal.
-  const double gain = std::exp(sc_.camera.exposure_jitter * gaussianFromKeys(seed_, RngStream::CameraExposure, static_cast<std::uint64_t>(k)));
-  if (truth) {
-    truth->T_world_camera = T_wc;
-    truth->gain = gain;
-  }
   const Mat3 R = T_wc.linear();
   const Vec3 origin = T_wc.translation();
-  const double sigma = sc_.camera.pixel_noise;
   // Tiles of kTile x kTile pixels: the primitives inside the cone of a tile's rays are few, so the
   // tile's rays test those (with a bounds pre-test) instead of walking the BVH; crowded tiles use the
-  // BVH. Both give the same hit. Pixel noise: one Box-Muller pair per two horizontally adjacent
-  // pixels (keys: frame, row, pair).
+  // BVH. Both give the same hit.
   constexpr int kTile = 16;
   constexpr std::size_t kMaxCandidates = 24;
-  const int tiles_x = (img.width + kTile - 1) / kTile, tiles_y = (img.height + kTile - 1) / kTile;
-  const std::size_t width = static_cast<std::size_t>(img.width);
+  const int w = cam.width(), h = cam.height();
+  const int tiles_x = (w + kTile - 1) / kTile, tiles_y = (h + kTile - 1) / kTile;
+  const std::size_t width = static_cast<std::size_t>(w);
   auto renderTiles = [&](int first, int step) {  // tile rows first, first + step, ...
     std::vector<int> candidates;
     std::vector<Vec3> dirs(kTile * kTile);
     for (int ty = first; ty < tiles_y; ty += step)
       for (int tx = 0; tx < tiles_x; ++tx) {
-        const int r0 = ty * kTile, r1 = std::min(r0 + kTile, img.height);
-        const int c0 = tx * kTile, c1 = std::min(c0 + kTile, img.width);
+        const int r0 = ty * kTile, r1 = std::min(r0 + kTile, h);
+        const int c0 = tx * kTile, c1 = std::min(c0 + kTile, w);
         Vec3 sum = Vec3::Zero();
         for (int r = r0; r < r1; ++r)
           for (int c = c0; c < c1; ++c) {
@@ -243,25 +239,84 @@ Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
         world_.primitivesInCone(origin, axis, std::acos(std::clamp(cos_min, -1.0, 1.0)) + 1e-6, kCameraMaxRange, candidates);
         const bool use_bvh = candidates.size() > kMaxCandidates;
         for (int r = r0; r < r1; ++r)
-          for (int c = c0; c < c1; c += 2) {
-            double noise[2] = {0.0, 0.0};
-            if (sigma > 0.0)
-              gaussianPairFromKeys(seed_, RngStream::CameraPixel, static_cast<std::uint64_t>(k),
-                                   (static_cast<std::uint64_t>(r) << 32) | static_cast<std::uint64_t>(c / 2), noise[0], noise[1]);
-            for (int h = 0; h < 2 && c + h < c1; ++h) {
-              const std::size_t i = static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c + h);
-              if (!cam.valid()[i]) continue;
-              const Vec3& dir = dirs[static_cast<std::size_t>((r - r0) * kTile + (c + h - c0))];
-              const Hit hit = use_bvh ? world_.raycast(origin, dir, kCameraMaxRange, cam.pixelAngle()[i])
-                                      : world_.raycastAmong(candidates, origin, dir, kCameraMaxRange, cam.pixelAngle()[i]);
-              const double radiance = hit.valid ? world_.radiance(hit) : World::skyRadiance(dir);
-              const double value = kGrayPerRadiance * gain * radiance + sigma * noise[h];
-              img.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
-            }
+          for (int c = c0; c < c1; ++c) {
+            const std::size_t i = static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c);
+            if (!cam.valid()[i]) continue;
+            const Vec3& dir = dirs[static_cast<std::size_t>((r - r0) * kTile + (c - c0))];
+            const Hit hit = use_bvh ? world_.raycast(origin, dir, kCameraMaxRange, cam.pixelAngle()[i])
+                                    : world_.raycastAmong(candidates, origin, dir, kCameraMaxRange, cam.pixelAngle()[i]);
+            acc[i] += weight * (hit.valid ? world_.radiance(hit) : World::skyRadiance(dir));
           }
       }
   };
   runParts(std::clamp(opt_.threads, 1, 16), renderTiles);
+}
+
+Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
+  const SimCameraModel& cam = *camera_;
+  const CameraSimConfig& cc = sc_.camera;
+  Image img;
+  const Utime t_capture = cameraUtime(k);
+  img.utime = cameraStamp(k);
+  img.width = cam.width();
+  img.height = cam.height();
+  img.row_stride = img.width;
+  img.format = PixelFormat::Gray8;
+  img.exposure_time_s = 0.f;  // unknown: the estimator estimates the exposure
+  img.data.assign(static_cast<std::size_t>(img.width) * img.height, 0);
+  const Pose T_wc = T_world_camera(t_capture);
+  // Exposure gain: a per-frame log-normal jitter times the auto-exposure steps passed by then.
+  double gain = std::exp(cc.exposure_jitter * gaussianFromKeys(seed_, RngStream::CameraExposure, static_cast<std::uint64_t>(k)));
+  const double t_rel = relTime(t_capture);
+  for (std::size_t i = 0; i + 1 < cc.exposure_steps.size(); i += 2)
+    if (t_rel >= cc.exposure_steps[i]) gain *= cc.exposure_steps[i + 1];
+  // Motion blur: the radiance averaged over poses at the centres of n equal parts of the exposure.
+  const int n = blurSamples(k);
+  if (truth) {
+    truth->T_world_camera = T_wc;
+    truth->gain = gain;
+    truth->capture_utime = t_capture;
+    truth->blur_samples = n;
+  }
+  const std::size_t width = static_cast<std::size_t>(img.width);
+  std::vector<double> radiance(width * static_cast<std::size_t>(img.height), 0.0);
+  if (n == 1) {
+    accumulateRadiance(T_wc, 1.0, radiance);
+  } else {
+    for (int s = 0; s < n; ++s) {
+      const double dt = cc.exposure_time_s * ((s + 0.5) / n - 0.5);
+      accumulateRadiance(T_world_camera(t_capture + fromSeconds(dt)), 1.0 / n, radiance);
+    }
+  }
+  // Vignetting 1 - k r^2, r the distance from the principal point over that of the farthest corner.
+  double r2_corner = 0.0;
+  for (double u : {0.0, double(img.width - 1)})
+    for (double v : {0.0, double(img.height - 1)})
+      r2_corner = std::max(r2_corner, (u - cc.cx) * (u - cc.cx) + (v - cc.cy) * (v - cc.cy));
+  const double kv = cc.vignetting / std::max(r2_corner, 1e-12);
+  // Pixel noise: one Box-Muller pair per two horizontally adjacent pixels (keys: frame, row, pair).
+  const double sigma = cc.pixel_noise;
+  auto expose = [&](int first, int step) {
+    for (int r = first; r < img.height; r += step)
+      for (int c = 0; c < img.width; c += 2) {
+        double noise[2] = {0.0, 0.0};
+        if (sigma > 0.0)
+          gaussianPairFromKeys(seed_, RngStream::CameraPixel, static_cast<std::uint64_t>(k),
+                               (static_cast<std::uint64_t>(r) << 32) | static_cast<std::uint64_t>(c / 2), noise[0], noise[1]);
+        for (int hh = 0; hh < 2 && c + hh < img.width; ++hh) {
+          const std::size_t i = static_cast<std::size_t>(r) * width + static_cast<std::size_t>(c + hh);
+          if (!cam.valid()[i]) continue;
+          double rad = radiance[i];
+          if (kv > 0.0) {
+            const double du = c + hh - cc.cx, dv = r - cc.cy;
+            rad *= 1.0 - kv * (du * du + dv * dv);
+          }
+          const double value = kGrayPerRadiance * gain * rad + sigma * noise[hh];
+          img.data[i] = static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
+        }
+      }
+  };
+  runParts(std::clamp(opt_.threads, 1, 16), expose);
   return img;
 }
 
@@ -269,7 +324,7 @@ bool Simulator::next(SimEvent& ev) {
   for (;;) {
     const Utime t_imu = imuUtime(next_imu_);
     const Utime t_scan = lidarUtime(next_scan_);
-    const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
+    const Utime t_cam = camera_ ? cameraStamp(next_image_) : std::numeric_limits<Utime>::max();
     const Utime t = std::min({t_imu, t_scan, t_cam});
     if (t >= end_) return false;
     ev.utime = t;
@@ -297,7 +352,7 @@ void Simulator::run(const SimCallbacks& cb) {
   for (;;) {
     const Utime t_imu = imuUtime(next_imu_);
     const Utime t_scan = lidarUtime(next_scan_);
-    const Utime t_cam = camera_ ? cameraUtime(next_image_) : std::numeric_limits<Utime>::max();
+    const Utime t_cam = camera_ ? cameraStamp(next_image_) : std::numeric_limits<Utime>::max();
     const Utime t = std::min({t_imu, t_scan, t_cam});
     if (t >= end_) return;
     if (t == t_imu) {

@@ -106,6 +106,11 @@ struct CameraSimConfig {
   double exposure_jitter = 0.1;  ///< sigma of log(gain), per frame
   double pixel_noise = 2.0;      ///< Gaussian sigma, gray levels
   std::vector<double> dropouts_s;  ///< [t0, t1, ...] seconds from the start: no image inside any [t0, t1)
+  /// Faults of real cameras (config/sim/README.md), all off by default:
+  double exposure_time_s = 0.0;  ///< > 0: motion blur, the radiance integrated over the exposure
+  std::vector<double> exposure_steps;  ///< [t, factor, ...]: the gain is multiplied by factor from t on
+  double vignetting = 0.0;       ///< k of the radial fall-off 1 - k r^2 (r = 1 at the farthest corner)
+  double stamp_delay_s = 0.0;    ///< images are stamped this long after their mid-exposure time
   void load(const ConfigNode& n);
 };
 

@@ -41,8 +41,10 @@ struct ImuTruth {
 
 /// Truth behind one image.
 struct ImageTruth {
-  Pose T_world_camera = Pose::Identity();
-  double gain = 1.0;  ///< exposure gain applied to the radiance
+  Pose T_world_camera = Pose::Identity();  ///< at mid-exposure
+  double gain = 1.0;  ///< exposure gain applied to the radiance (jitter x exposure steps)
+  Utime capture_utime = 0;  ///< true mid-exposure time (the image is stamped camera.stamp_delay_s later)
+  int blur_samples = 1;     ///< poses averaged over the exposure (1: no motion blur)
 };
 
 /// Counters of the LiDAR model.
@@ -82,14 +84,23 @@ class Simulator {
   // ---- single sensors (pure functions of the index; used by next() and by tests) ----
   /// LiDAR scan j (starts at lidarUtime(j)); `stats` accumulates counters when given.
   LidarScan lidarScan(std::int64_t j, LidarStats* stats = nullptr) const;
-  /// Image k (at cameraUtime(k)); requires a camera.
+  /// Image k, captured (mid-exposure) at cameraUtime(k) and stamped at cameraStamp(k); requires a
+  /// camera. With camera.exposure_time_s the radiance is averaged over poses spread across the
+  /// exposure (blurSamples), then exposure gain (jitter, camera.exposure_steps), vignetting and pixel
+  /// noise are applied.
   Image renderImage(std::int64_t k, ImageTruth* truth = nullptr) const;
+  /// Poses averaged for image k: the rig's motion over the exposure, rotation and translation seen at
+  /// 1 m, in pixels at the larger focal length, rounded up (at most a pixel between sub-samples; 1 when
+  /// it moves less than a pixel), at most 64.
+  int blurSamples(std::int64_t k) const;
   /// Exact (noise-free) IMU measurement at time t (seconds since start).
   void exactImu(double t, Vec3& gyro, Vec3& accel) const;
 
   Utime imuUtime(std::int64_t k) const;
   Utime lidarUtime(std::int64_t j) const;
   Utime cameraUtime(std::int64_t k) const;
+  /// The stamp image k carries: cameraUtime(k) + camera.stamp_delay_s.
+  Utime cameraStamp(std::int64_t k) const;
   Utime startUtime() const { return start_; }
   Utime endUtime() const { return end_; }  ///< exclusive
   /// Seconds since the start for a sensor time.
@@ -114,6 +125,8 @@ class Simulator {
 
  private:
   void addVibration(double t_rel, ImuSample& s) const;
+  /// Adds weight x the radiance seen from camera pose T_wc to acc (one value per pixel).
+  void accumulateRadiance(const Pose& T_wc, double weight, std::vector<double>& acc) const;
   void imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth);
   /// Rays [first, last) of scan j (which starts t0 s after the start): returns into `points`, the
   /// rays without one counted in `st`.
