@@ -32,7 +32,11 @@ FramePipeline::FramePipeline(PipelineConfig cfg)
       lio_(cfg_.lio),
       selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)),
       image_check_(cfg_.vio.pixel_noise) {
-  if (cfg_.camera.enabled) camera_ = CameraModel::create(cfg_.camera);
+  if (cfg_.camera.enabled) {
+    camera_ = CameraModel::create(cfg_.camera);
+    vignetting_ = VignettingCorrection(cfg_.camera.vignetting, camera_->width(), camera_->height(), camera_->cx(),
+                                       camera_->cy());
+  }
   if (cfg_.threads != 1) pool_ = std::make_unique<WorkerPool>(cfg_.threads);  // throws naming a bad count
 }
 
@@ -90,8 +94,13 @@ const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, Frame
     scratch.data.assign(dst.datastart, dst.dataend);
     gray = &scratch;
   }
-  const ImageStatus s = image_check_.check(*gray);
-  return s == ImageStatus::Ok ? gray : fail(s);
+  const ImageStatus s = image_check_.check(*gray);  // on the camera's own values (black, saturated, frozen)
+  if (s != ImageStatus::Ok) return fail(s);
+  if (vignetting_.active()) {
+    vignetting_.apply(*gray, scratch);
+    gray = &scratch;
+  }
+  return gray;
 }
 
 void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {

@@ -11,6 +11,7 @@ void CameraConfig::load(const ConfigNode& root) {
   enabled = true;
   n.get("enabled", enabled);
   n.get("model", model).get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
+  n.get("vignetting", vignetting);
   if (!enabled) {
     // A disabled camera may still carry its calibration: read it without requiring it.
     n.get("width", width).get("height", height).get("fx", fx).get("fy", fy).get("cx", cx).get("cy", cy);
@@ -28,6 +29,7 @@ void CameraConfig::load(const ConfigNode& root) {
   n.check(distortion.empty() || distortion.size() == 4, "distortion", "needs 4 coefficients (or none)");
   n.check(scale > 0 && scale <= 1.0, "scale", "must be in (0, 1]");
   n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
+  n.check(vignetting >= 0 && vignetting < 1, "vignetting", "must be in [0, 1) (the fall-off 1 - k r^2 at the corner)");
 }
 
 }  // namespace livo

@@ -18,6 +18,7 @@
 #include "livo/estimation/frame_result.hpp"
 #include "livo/estimation/frame_selector.hpp"
 #include "livo/estimation/image_check.hpp"
+#include "livo/estimation/vignetting.hpp"
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/estimation/map_access.hpp"
 #include "livo/estimation/pipeline_config.hpp"
@@ -62,6 +63,7 @@ class FramePipeline {
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
   std::unique_ptr<WorkerPool> pool_;     ///< null with one thread
   ImageCheck image_check_;
+  VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;
 };

@@ -18,6 +18,7 @@ struct CameraConfig {
   double scale = 1.0;            ///< image and intrinsics scale used by the visual update (0 < scale <= 1)
   Pose T_imu_camera = Pose::Identity();  ///< camera pose in the IMU frame (required when enabled)
   double pixel_noise = 3.0;      ///< photometric noise sigma, gray levels
+  double vignetting = 0.0;       ///< k of the fall-off 1 - k r^2, divided out of every image (vignetting.hpp)
 
   /// Reads the `camera` section of a rig config; keys owned by the preprocessing (time_offset_s) are
   /// read there. Throws ConfigError naming the key when a required one is missing or invalid.
