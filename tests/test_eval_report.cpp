@@ -161,13 +161,14 @@ TEST(LivoReport, MapPicturesShowTheRoomFromAboveWithoutItsCeiling) {
   cloud.height = 1;
   {
     std::ofstream tum(dir / "run" / "trajectory.tum"), csv(dir / "run" / "frames.csv");
-    csv << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes\n";
+    csv << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes,"
+           "n_longterm_points\n";
     for (int i = 0; i < 100; ++i) {
       const double a = 2 * M_PI * i / 100, t = 10.0 + 0.1 * i;
       Pose T = Pose::Identity();
       T.translation() = Vec3(1.6 + 0.6 * std::cos(a), 1.6 + 0.6 * std::sin(a), 1.0);
       writeTum(tum, {t, T});
-      csv << t << ",5,1,6,0.3,0,1,1000,900,40,1000000\n";
+      csv << t << ",5,1,6,0.3,0,1,1000,900,40,1000000," << (i >= 60 ? 10 : 0) << "\n";  // a revisit from 16 s
     }
   }
   std::ofstream(dir / "run" / "stats.json") << R"({"frames": 100, "visual_frames": 100, "map": {"bytes": 1000000}})";
@@ -186,6 +187,10 @@ TEST(LivoReport, MapPicturesShowTheRoomFromAboveWithoutItsCeiling) {
     const std::string md = slurp((dir / "run" / "report" / "README.md").string());
     EXPECT_NE(md.find("![map, top](map_top.png)"), std::string::npos) << md;
     EXPECT_NE(md.find("![map, oblique](map_oblique.png)"), std::string::npos) << md;
+    // The long-term map's points on the timeline and their share: 40 frames x 10 of 100 x 40 used.
+    EXPECT_TRUE(fs::exists(dir / "run" / "report" / "visual_points.png")) << encoding;
+    EXPECT_NE(md.find("| visual points through the long-term map | 10.0 % of 4000; on 40 visual frames |"), std::string::npos)
+        << md;
     // The camera-coloured top view (exact colours: no shading from above): no ceiling (cut at the highest
     // pose + 1 m), the table's top hides the floor below it: table / (table + floor) is the table's share
     // of the room, 1 / 12, up to the pixels at the edges and under the trajectory's line.

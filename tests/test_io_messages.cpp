@@ -54,6 +54,7 @@ VisualPoint randVisualPoint(int n_obs) {
   p.converged = uniInt(0, 1) == 1;
   p.bad_updates = uniInt(0, 5);
   p.views = n_obs + std::int32_t(uniInt(0, 9));
+  p.from_longterm = uniInt(0, 1) == 1;
   return p;
 }
 SubmapPlane randPlane() {
@@ -119,6 +120,7 @@ void expectVisualPointEq(const VisualPoint& a, const VisualPoint& b) {
   EXPECT_EQ(a.converged, b.converged);
   EXPECT_EQ(a.bad_updates, b.bad_updates);
   EXPECT_EQ(a.views, b.views);
+  EXPECT_EQ(a.from_longterm, b.from_longterm);
   ASSERT_EQ(a.obs.size(), b.obs.size());
   for (std::size_t i = 0; i < a.obs.size(); ++i) expectObsEq(a.obs[i], b.obs[i]);
 }
@@ -285,12 +287,14 @@ TEST(EstimatorMessages, RoundTripOdometryRegisteredScanStats) {
   EstimatorStats s;
   s.utime = 5; s.frame_index = 6; s.lio_ms = 7.5f; s.vio_ms = 2.25f; s.map_ms = 0.5f; s.total_ms = 11.f;
   s.sigma_min = 0.125f; s.degenerate = true; s.visual_used = false; s.map_timeout = true;
-  s.n_points = 1000; s.n_planes_matched = 900; s.n_visual_points = 80; s.dropped_points = 12;
+  s.n_points = 1000; s.n_planes_matched = 900; s.n_visual_points = 80; s.n_longterm_visual_points = 30;
+  s.dropped_points = 12;
   const EstimatorStats b = roundTrip<livo::estimator_stats_t>(s);
   EXPECT_EQ(b.utime, 5); EXPECT_EQ(b.frame_index, 6); EXPECT_EQ(b.lio_ms, 7.5f); EXPECT_EQ(b.vio_ms, 2.25f);
   EXPECT_EQ(b.map_ms, 0.5f); EXPECT_EQ(b.total_ms, 11.f); EXPECT_EQ(b.sigma_min, 0.125f);
   EXPECT_TRUE(b.degenerate); EXPECT_FALSE(b.visual_used); EXPECT_TRUE(b.map_timeout);
   EXPECT_EQ(b.n_points, 1000); EXPECT_EQ(b.n_planes_matched, 900); EXPECT_EQ(b.n_visual_points, 80);
+  EXPECT_EQ(b.n_longterm_visual_points, 30);
   EXPECT_EQ(b.dropped_points, 12);
 }
 
@@ -437,6 +441,8 @@ TEST(EstimatorMessages, ValidationNamesTheField) {
   expectError(validate(es), "estimator_stats_t.lio_ms");
   es = toMsg(EstimatorStats()); es.n_planes_matched = -3;
   expectError(validate(es), "estimator_stats_t.n_planes_matched");
+  es = toMsg(EstimatorStats()); es.n_visual_points = 4; es.n_longterm_visual_points = 5;
+  expectError(validate(es), "estimator_stats_t.n_longterm_visual_points", "more than n_visual_points");
 }
 
 TEST(MessageConversions, FromMsgLeavesOutputUntouchedAndDecodePathReportsField) {
@@ -485,7 +491,7 @@ TEST(MessageConversions, ToMsgRejectsWhatTheMessageCannotCarry) {
 TEST(MapMessages, LargeSubmapEncodesAndDecodes) {
   constexpr std::size_t kPlaneBytes = 3 * 4 + 1 + 3 + 3 * 8 + 3 * 8 + 36 * 8 + 4 + 4 + 4 + 1;       // 365
   constexpr std::size_t kPatchBytes = 8 + 1 + 1 + 4 + 432 * 4 + 7 * 8 + 2 * 4 + 4 + 4;             // 1814
-  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4 + 4 + 4;                // 97 + patches
+  constexpr std::size_t kPointBytes = 8 + 3 * 8 + 3 * 8 + 6 * 4 + 1 + 4 + 4 + 4 + 1 + 4;            // 98 + patches
   std::size_t empty = 0;
   roundTrip<livo::submap_t>(Submap(), &empty);
   for (const int n_obs : {1, 8}) {

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -186,7 +187,14 @@ TEST(HybridMap, SlideDeletesLocalVoxelsAndMovesVisualPointsToLongterm) {
     EXPECT_EQ(p.obs[0].utime, p.id % 4);
     EXPECT_EQ(p.obs.size(), 1u);
     EXPECT_EQ(p.obs.capacity(), 1u);
+    EXPECT_TRUE(p.from_longterm);
   });
+  // The points it gave back keep the mark (the per-frame count of long-term points used reads it); fillScene's
+  // points never left and have none.
+  std::size_t returned = 0;
+  map.visual().local().forEach([&returned](const VisualPoint& p) { returned += p.from_longterm; });
+  EXPECT_GT(returned, 0u);
+  EXPECT_LE(returned, map.counters().moved_to_local);
 }
 
 // map.longterm_enabled false: the same slides and LiDAR map, but every visual point that leaves the
@@ -214,6 +222,7 @@ TEST(HybridMap, WithoutLongtermMapLeavingPointsAreDeleted) {
   EXPECT_EQ(without.counters().moved_to_longterm, 0u);
   EXPECT_GT(with.counters().moved_to_local, 0u) << "the scene must have a revisit";
   EXPECT_EQ(without.counters().moved_to_local, 0u);
+  without.visual().local().forEach([](const VisualPoint& p) { EXPECT_FALSE(p.from_longterm) << p.id; });
   EXPECT_EQ(without.counters().deleted_points, total - without.visual().local().size());
   EXPECT_LT(without.stats().bytes, with.stats().bytes);
 }
@@ -544,4 +553,34 @@ TEST(HybridMap, ByteAccountingIsTheSumOfTheParts) {
   std::cout << "bytes: lidar " << s.bytes_lidar << " (" << double(s.bytes_lidar) / double(s.local_voxels)
             << " per root voxel), visual local " << s.bytes_visual_local << ", long-term " << s.bytes_visual_longterm
             << ", index " << s.bytes_index << "\n";
+}
+
+// The map server's upsert of an estimator's copy: a rejected copy leaves the stored point in place,
+// and a copy made before the point moved to the long-term map does not clear its long-term mark.
+TEST(HybridMap, UpsertKeepsTheStoredPointOnRejectionAndTheLongtermMark) {
+  DualVisualMap dual{VisualMapConfig{}};
+  auto lt = visualPoint(7, Vec3(2, 0, 1));
+  lt->from_longterm = true;
+  ASSERT_TRUE(dual.longterm().insert(std::move(lt)));
+  VisualPoint copy = *visualPoint(7, Vec3(2, 0, 1), true, 2);  // the estimator's copy: no mark yet
+  VisualPoint bad = copy;
+  bad.p_world.x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(dual.upsert(bad));
+  ASSERT_NE(dual.longterm().find(7), nullptr) << "a rejected copy must not remove the point";
+  EXPECT_EQ(dual.longterm().find(7)->obs.size(), 1u);
+  bad = copy;
+  bad.reference = 5;
+  EXPECT_FALSE(dual.upsert(bad));
+  ASSERT_NE(dual.longterm().find(7), nullptr);
+  EXPECT_TRUE(dual.upsert(copy));
+  const VisualPoint* p = dual.longterm().find(7);
+  ASSERT_NE(p, nullptr) << "the copy replaces the point in the map that holds it";
+  EXPECT_EQ(p->obs.size(), 2u);
+  EXPECT_TRUE(p->from_longterm);
+  EXPECT_TRUE(dual.isLongterm(*p));
+  // A removal (no observations) still removes it.
+  VisualPoint removal;
+  removal.id = 7;
+  EXPECT_TRUE(dual.upsert(removal));
+  EXPECT_EQ(dual.longterm().find(7), nullptr);
 }

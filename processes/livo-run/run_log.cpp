@@ -110,6 +110,7 @@ class FrameSink {
     rec.n_points = r.lio.n_points;
     rec.n_planes_matched = r.lio.n_matched;
     rec.n_visual_points = r.n_visual_points;
+    rec.n_longterm_visual_points = r.n_longterm_visual_points;
     rec.map_bytes = map_bytes_(r);
     return rec;
   }

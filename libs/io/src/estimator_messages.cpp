@@ -71,9 +71,13 @@ Validation checkStats(const livo::estimator_stats_t& m) {
   const std::pair<std::int32_t, const char*> counts[] = {{m.n_points, "n_points"},
                                                          {m.n_planes_matched, "n_planes_matched"},
                                                          {m.n_visual_points, "n_visual_points"},
+                                                         {m.n_longterm_visual_points, "n_longterm_visual_points"},
                                                          {m.dropped_points, "dropped_points"}};
   for (const auto& c : counts)
     if (c.first < 0) return Validation::fail(std::string(c.second) + ": negative count " + std::to_string(c.first));
+  if (m.n_longterm_visual_points > m.n_visual_points)
+    return Validation::fail("n_longterm_visual_points: " + std::to_string(m.n_longterm_visual_points) +
+                            " more than n_visual_points " + std::to_string(m.n_visual_points));
   return Validation::ok();
 }
 
@@ -177,6 +181,7 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.n_points = s.n_points;
   m.n_planes_matched = s.n_planes_matched;
   m.n_visual_points = s.n_visual_points;
+  m.n_longterm_visual_points = s.n_longterm_visual_points;
   m.dropped_points = s.dropped_points;
   return m;
 }
@@ -200,6 +205,7 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.n_points = m.n_points;
   out.n_planes_matched = m.n_planes_matched;
   out.n_visual_points = m.n_visual_points;
+  out.n_longterm_visual_points = m.n_longterm_visual_points;
   out.dropped_points = m.dropped_points;
   return Validation::ok();
 }

@@ -214,6 +214,7 @@ void convert(const livo::visual_point_t& m, VisualPoint& p) {
   p.bad_updates = m.bad_updates;
   p.reference = m.reference;
   p.views = m.views;
+  p.from_longterm = m.from_longterm != 0;
   p.obs.resize(m.patches.size());
   for (std::size_t i = 0; i < m.patches.size(); ++i) convert(m.patches[i], p.obs[i]);
 }
@@ -275,6 +276,7 @@ livo::visual_point_t toMsg(const VisualPoint& p) {
   m.bad_updates = p.bad_updates;
   m.reference = p.reference;
   m.views = p.viewCount();
+  m.from_longterm = p.from_longterm;
   m.num_patches = static_cast<std::int32_t>(p.obs.size());
   m.patches.reserve(p.obs.size());
   for (const auto& o : p.obs) m.patches.push_back(toMsg(o));

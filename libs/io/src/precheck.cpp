@@ -110,9 +110,9 @@ bool walkPatch(Walker& w, const std::string& f) {
 
 bool walkVisualPoint(Walker& w, const std::string& f) {
   std::int32_t n = 0;
-  // id, position[3], normal[3], position_cov[6] (float), converged, bad_updates, reference, views;
-  // num_patches; patches
-  if (!(w.skip(8 + 24 + 24 + 24 + 1 + 4 + 4 + 4, f + ".header") &&
+  // id, position[3], normal[3], position_cov[6] (float), converged, bad_updates, reference, views,
+  // from_longterm; num_patches; patches
+  if (!(w.skip(8 + 24 + 24 + 24 + 1 + 4 + 4 + 4 + 1, f + ".header") &&
         w.count(f + ".num_patches", w.lim().max_patches_per_point, 8 + 2 + 4 + 72, n)))
     return false;
   for (std::int32_t i = 0; i < n; ++i)

@@ -53,7 +53,8 @@ void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bo
 RunOutputs::RunOutputs(const std::string& dir)
     : dir_(ensureDir(dir)), tum_(dir + "/trajectory.tum"), csv_(dir + "/frames.csv") {
   if (!csv_) throw std::runtime_error(dir + "/frames.csv: cannot open for writing");
-  csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes\n";
+  csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes,"
+          "n_longterm_points\n";
   csv_.flush();
 }
 
@@ -63,7 +64,7 @@ void RunOutputs::addFrame(const FrameRecord& f) {
   csv_ << std::fixed << std::setprecision(6) << toSeconds(f.utime) << std::setprecision(3) << ',' << f.lio_ms << ','
        << f.vio_ms << ',' << f.total_ms << ',' << std::setprecision(5) << f.sigma_min << ',' << int(f.degenerate)
        << ',' << int(f.visual_used) << ',' << f.n_points << ',' << f.n_planes_matched << ',' << f.n_visual_points
-       << ',' << f.map_bytes << '\n';
+       << ',' << f.map_bytes << ',' << f.n_longterm_visual_points << '\n';
   csv_.flush();
   if (!csv_) throw std::runtime_error(dir_ + "/frames.csv: write failed");
 }

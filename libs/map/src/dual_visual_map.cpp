@@ -52,7 +52,7 @@ std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, co
     if (cell < 0) return;
     const double z = (T_camera_world * p->p_world).z();
     Best& b = best[std::size_t(cell)];
-    if (b.point == nullptr || z < b.z || (z == b.z && p->id < b.point->id)) b = {p, px, z, longterm};
+    if (winsCell(*p, z, b.point, b.z, local_.config().occlusion_depth_m)) b = {p, px, z, longterm};
   };
   for (std::size_t i = 0; i < local.size(); ++i) offer(local[i], px_local[i], false);
   for (std::size_t i = 0; i < lt.size(); ++i) offer(lt[i], px_lt[i], true);
@@ -109,16 +109,22 @@ std::size_t DualVisualMap::copyPointsIn(const std::vector<VoxelKey>& visual_keys
 }
 
 bool DualVisualMap::upsert(VisualPoint p) {
+  // A rejected point leaves the one it would replace in place.
+  if (!p.obs.empty() && (!p.p_world.allFinite() || p.reference < -1 || p.reference >= int(p.obs.size()))) return false;
   VisualMap* owner = &local_;
   std::size_t old_obs = 0;
+  bool old_from_longterm = false;
   if (auto old = local_.extract(p.id)) {
     old_obs = old->obs.size();
+    old_from_longterm = old->from_longterm;
   } else if (auto old_lt = longterm_.extract(p.id)) {
     owner = &longterm_;
     old_obs = old_lt->obs.size();
+    old_from_longterm = true;
   }
   if (p.obs.empty()) return true;  // a removal
-  if (!p.p_world.allFinite() || p.reference < -1 || p.reference >= int(p.obs.size())) return false;
+  // The sender's copy may predate the point's move to the long-term map.
+  p.from_longterm = p.from_longterm || old_from_longterm;
   if (p.obs.size() > old_obs) added_observations_ += p.obs.size() - old_obs;
   return owner->insert(std::make_unique<VisualPoint>(std::move(p)));
 }

@@ -21,10 +21,13 @@ using namespace map_codec;
 namespace {
 
 constexpr char kMagic[8] = {'L', 'I', 'V', 'O', 'M', 'A', 'P', '1'};
-// Version 2: patch samples as bytes (PatchPyramid) and each point's view count. Version 1 (float
-// samples, no view count: taken as the observations it holds) is still read.
-constexpr std::uint32_t kVersion = 2;
+// Version 3: each point's long-term flag (VisualPoint::from_longterm) after its view count. Version 2:
+// patch samples as bytes (PatchPyramid) and the view count. Versions 1 (float samples, no view count:
+// taken as the observations it holds) and 2 are still read; without the flag, the points of the
+// long-term section have it and those of the local section do not.
+constexpr std::uint32_t kVersion = 3;
 constexpr std::uint32_t kFloatPatchVersion = 1;
+constexpr std::uint32_t kBytePatchVersion = 2;
 constexpr std::uint64_t kMaxVisualPoints = 50'000'000;
 constexpr std::uint32_t kMaxObservations = 10'000;
 
@@ -56,6 +59,7 @@ void putVisualPoint(std::ostream& os, const VisualPoint& p) {
   put(os, p.last_seen);
   put(os, std::uint32_t(p.obs.size()));
   put(os, p.viewCount());
+  put(os, std::uint8_t(p.from_longterm));
   for (const VisualObservation& o : p.obs) {
     put(os, o.utime);
     put(os, o.patch.values);
@@ -97,6 +101,7 @@ VisualPoint getVisualPoint(std::istream& is, std::uint32_t version) {
                                           : get<std::int32_t>(is, "view count");
   if (p.views < std::int32_t(n))
     throw std::runtime_error("view count " + std::to_string(p.views) + " below the observation count " + std::to_string(n));
+  if (version > kBytePatchVersion) p.from_longterm = get<std::uint8_t>(is, "long-term flag") != 0;
   p.obs.resize(n);
   for (VisualObservation& o : p.obs) {
     o.utime = get<Utime>(is, "observation time");
@@ -115,11 +120,14 @@ void saveVisual(std::ostream& os, const VisualMap& m) {
   m.forEach([&os](const VisualPoint& p) { putVisualPoint(os, p); });
 }
 
-std::size_t loadVisual(std::istream& is, std::uint32_t version, VisualMap& m) {
+/// `longterm`: the section of the long-term map (its points have from_longterm whatever the file says).
+std::size_t loadVisual(std::istream& is, std::uint32_t version, VisualMap& m, bool longterm) {
   const auto n = get<std::uint64_t>(is, "visual point count");
   if (n > kMaxVisualPoints) throw std::runtime_error("visual point count " + std::to_string(n) + " over the limit");
   for (std::uint64_t i = 0; i < n; ++i) {
-    if (!m.insert(std::make_unique<VisualPoint>(getVisualPoint(is, version))))
+    auto p = std::make_unique<VisualPoint>(getVisualPoint(is, version));
+    p->from_longterm = p->from_longterm || longterm;
+    if (!m.insert(std::move(p)))
       throw std::runtime_error("visual point " + std::to_string(i) + ": duplicate id or bad position");
   }
   return std::size_t(n);
@@ -141,8 +149,8 @@ void loadContent(std::istream& is, std::uint32_t version, HybridMap& map) {
   map.clear();
   try {
     map.lidar().load(is);
-    loadVisual(is, version, map.visual().local());
-    loadVisual(is, version, map.visual().longterm());
+    loadVisual(is, version, map.visual().local(), false);
+    loadVisual(is, version, map.visual().longterm(), true);
   } catch (...) {
     map.clear();
     throw;
@@ -193,9 +201,9 @@ MapFileInfo loadMap(std::istream& is, const std::string& name, HybridMap& map) {
     if (!is.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(kMagic)) != 0)
       throw std::runtime_error("not a livo map file (bad magic)");
     const auto version = get<std::uint32_t>(is, "version");
-    if (version != kVersion && version != kFloatPatchVersion)
+    if (version < kFloatPatchVersion || version > kVersion)
       throw std::runtime_error("version " + std::to_string(version) + ", this build reads " +
-                               std::to_string(kFloatPatchVersion) + " and " + std::to_string(kVersion));
+                               std::to_string(kFloatPatchVersion) + " to " + std::to_string(kVersion));
     const double vs = get<double>(is, "voxel size");
     const double vvs = get<double>(is, "visual voxel size");
     const double cfg_vs = map.lidar().voxels().config().voxel_size_m;

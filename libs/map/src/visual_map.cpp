@@ -107,6 +107,13 @@ void VisualMap::rasterDepth(const CameraModel& cam, const Pose& T_camera_world, 
   }
 }
 
+bool winsCell(const VisualPoint& p, double z, const VisualPoint* best, double best_z, double same_surface_m) {
+  if (best == nullptr) return true;
+  if (p.from_longterm != best->from_longterm)
+    return p.from_longterm ? z <= best_z + same_surface_m : z < best_z - same_surface_m;
+  return z < best_z || (z == best_z && p.id < best->id);
+}
+
 std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                                   const std::vector<Vec3>& scan_points_world,
                                                   std::vector<Vec2>* pixels,
@@ -139,7 +146,7 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
       if (cell < 0) continue;
       ++retrieval_.in_image;
       Best& b = best[std::size_t(cell)];
-      if (p_cam.z() < b.z || (p_cam.z() == b.z && b.point != nullptr && p->id < b.point->id)) b = {p_cam.z(), p, px};
+      if (winsCell(*p, p_cam.z(), b.point, b.z, config_.occlusion_depth_m)) b = {p_cam.z(), p, px};
     }
   }
 

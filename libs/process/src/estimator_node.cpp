@@ -131,6 +131,7 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   st.n_points = f.lio.n_points;
   st.n_planes_matched = f.lio.n_matched;
   st.n_visual_points = f.n_visual_points;
+  st.n_longterm_visual_points = f.n_longterm_visual_points;
   st.dropped_points = std::int32_t(std::min<std::size_t>(nonfinite, 0x7fffffff));
   lcm_.publish(channels_.estimator_stats, toMsg(st));
   if (!f.lio.initialized) return;  // no pose yet

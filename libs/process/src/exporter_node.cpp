@@ -85,6 +85,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
     rec.n_points = s.n_points;
     rec.n_planes_matched = s.n_planes_matched;
     rec.n_visual_points = s.n_visual_points;
+    rec.n_longterm_visual_points = s.n_longterm_visual_points;
   } else {
     counters_["frames_without_stats"] += 1;
   }

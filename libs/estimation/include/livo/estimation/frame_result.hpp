@@ -31,7 +31,7 @@ struct FrameResult {
   bool visual_used = false;
   int n_visual_points = 0;     ///< visual points used by the update
   int n_new_visual_points = 0; ///< created this frame
-  int n_longterm_visual_points = 0;  ///< of n_visual_points, those from the long-term visual map (in process)
+  int n_longterm_visual_points = 0;  ///< of n_visual_points, those that came through the long-term map
   double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
   double vio_ms = 0.0;
   ImageStatus image = ImageStatus::Ok;  ///< a failed image (image_check.hpp) is never used

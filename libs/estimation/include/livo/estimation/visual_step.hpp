@@ -106,7 +106,9 @@ struct VisualStepResult {
   std::vector<VisualPoint*> points;  ///< the points in view that were used (valid until the map changes)
   int n_new_points = 0;
   std::size_t removed_bad = 0;
-  int n_longterm_used = 0;  ///< points used by the update that came from the long-term visual map
+  /// Points used by the update that came through the long-term visual map: held by it, or returned from
+  /// it to the local map on a revisit (VisualPoint::from_longterm; also known to a remote estimator).
+  int n_longterm_used = 0;
 };
 
 /// Step 6 at the LiDAR posterior (x, P): retrieval of the points in view of the scan, the

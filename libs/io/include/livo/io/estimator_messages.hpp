@@ -61,6 +61,7 @@ struct EstimatorStats {
   std::int32_t n_points = 0;          ///< downsampled points used
   std::int32_t n_planes_matched = 0;
   std::int32_t n_visual_points = 0;   ///< visual points used in the update
+  std::int32_t n_longterm_visual_points = 0;  ///< of those, points that came through the long-term map
   std::int32_t dropped_points = 0;    ///< NaN / out of range / blind
 };
 

@@ -1,8 +1,10 @@
 // The output directory of a run (livo-run --out DIR, livo-exporter --out DIR):
 //   trajectory.tum  IMU pose in the world frame per frame (flushed per line)
 //   frames.csv      one row per frame: t, lio_ms, vio_ms, total_ms, sigma_min, degenerate, visual_used,
-//                   n_points, n_planes_matched, n_visual_points, map_bytes (flushed per row; map_bytes:
-//                   the map's accounted bytes after the frame, 0 when unknown, e.g. livo-exporter)
+//                   n_points, n_planes_matched, n_visual_points, map_bytes, n_longterm_points (flushed
+//                   per row; map_bytes: the map's accounted bytes after the frame, 0 when unknown, e.g.
+//                   livo-exporter; n_longterm_points: of n_visual_points, those that came through the
+//                   long-term visual map, held by it or returned from it on a revisit)
 //   stats.json      frames, visual_frames, degenerate_frames, timed_frames, timing_ms {lio, vio,
 //                   vio_per_visual_frame, map, total} x {mean, median, p95, max}, peak_rss_mb, map
 //                   {local_voxels, visual_points_local, visual_points_longterm, bytes, and where the
@@ -38,6 +40,7 @@ struct FrameRecord {
   int n_points = 0;
   int n_planes_matched = 0;
   int n_visual_points = 0;
+  int n_longterm_visual_points = 0;  ///< of n_visual_points, those that came through the long-term map
   /// Accounted bytes of every map structure after this frame; 0 = unknown (livo-exporter) or not
   /// initialised. livo-run: the map's O(1) estimate with a memory cap, else an exact count every few
   /// frames carried forward (processes/livo-run/main.cpp).

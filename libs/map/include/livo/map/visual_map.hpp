@@ -64,6 +64,14 @@ struct VisualRetrievalStats {
   std::size_t selected = 0;         ///< points returned
 };
 
+/// The per-cell choice of pointsInView (both maps, and their merge in DualVisualMap): does candidate `p`
+/// at depth `z` beat the cell's current winner `best` (null: none) at depth `best_z`? The nearer point
+/// wins (ties: smaller id), except that a point the long-term map kept (VisualPoint::from_longterm)
+/// wins against one that it did not unless it lies farther by more than `same_surface_m` (the occlusion
+/// test's depth, occlusion_depth_m): on a revisit, the point anchored to the earlier pass is used
+/// rather than a new point on the same surface that carries the drift since then.
+bool winsCell(const VisualPoint& p, double z, const VisualPoint* best, double best_z, double same_surface_m);
+
 class VisualMap {
  public:
   explicit VisualMap(VisualMapConfig config = {});
@@ -80,7 +88,7 @@ class VisualMap {
   /// point (world frame, floor keys) are searched. A point qualifies when it has a reference
   /// observation, lies at depth z >= min_depth_m in the camera frame, projects and lies inside the
   /// border_px border; per grid cell the qualifying point with the smallest depth z wins (ties: smaller
-  /// id). A winner is occluded (dropped, its cell stays free) when a scan point projected within
+  /// id; a point the long-term map kept goes first on the same surface: winsCell). A winner is occluded (dropped, its cell stays free) when a scan point projected within
   /// +-occlusion_window_px of its pixel (rounded) is closer in depth by more than occlusion_depth_m.
   /// Results are ordered by cell index; `pixels` (optional) receives the projections. With
   /// `voxel_keys` the visual voxels searched are those keys instead of the scan's (a frame whose

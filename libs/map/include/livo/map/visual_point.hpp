@@ -85,6 +85,9 @@ struct VisualPoint {
   std::int32_t views = 0;
   /// views, or the observations held where that is more (a point built without counting them).
   std::int32_t viewCount() const { return std::max(views, static_cast<std::int32_t>(obs.size())); }
+  /// Moved to the long-term visual map at least once (held there now, or back in the local map after a
+  /// revisit): what the long-term map kept alive (VisualStep's n_longterm_used counts these).
+  bool from_longterm = false;
   Utime last_seen = 0;
 
   const VisualObservation* referenceObs() const {
