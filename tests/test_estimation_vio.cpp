@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -115,6 +116,78 @@ TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
     }
   }
   EXPECT_EQ(checked, 3 * 9 * 7);
+}
+
+// With the camera's time offset t_d: the image was captured at the state's time + t_d, the body moving
+// meanwhile. The rows with respect to dtheta and dp at the shifted capture pose, and d r / d t_d,
+// against numeric differences (of x.boxplus and of x.time_offset_s).
+TEST(VioUpdate, TimeOffsetJacobianMatchesNumericDifferences) {
+  const Image img = syntheticImage(320, 240);
+  const auto cam = CameraModel::create(pinholeConfig(320, 240));
+  const Pose T_imu_camera = Pose::Identity();
+  VisualPoint p = planePoint(*cam, img, Vec2(150.3, 110.7), 4.0);
+  NavState x;
+  x.R_world_imu = expSO3(Vec3(0.002, -0.003, 0.001));
+  x.p_world_imu = Vec3(0.01, -0.005, 0.02);
+  x.v_world = Vec3(0.8, -0.3, 0.4);
+  x.inv_exposure = 1.1;
+  x.time_offset_s = -0.012;
+  CaptureMotion motion;
+  motion.omega_imu = Vec3(0.4, -0.9, 0.6);
+  const auto capturePixel = [&](const NavState& s) {
+    Vec2 px;
+    cam->project(imuPoseAtCapture(s, motion).inverse() * p.p_world, px);
+    return px;
+  };
+  // The capture pose moves the pixel (the test is not degenerate), and it is the uniform motion.
+  EXPECT_GT((capturePixel(x) - pixelOf(*cam, x, p.p_world)).norm(), 0.5);
+  const Pose Tc = imuPoseAtCapture(x, motion);
+  EXPECT_LT((Tc.translation() - (x.p_world_imu + x.v_world * x.time_offset_s)).norm(), 1e-15);
+  EXPECT_LT((Tc.linear() - x.R_world_imu * expSO3(motion.omega_imu * x.time_offset_s)).norm(), 1e-15);
+  const Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  int checked = 0;
+  std::vector<double> ratios_pose, ratios_td;  // analytic / numeric where the slope is clear
+  for (int level = 0; level < PatchPyramid::kLevels; ++level)
+    for (int row = 0; row < 8; row += 3)
+      for (int col = 0; col < 8; col += 3) {
+        double r0, H_td = 0;
+        Eigen::Matrix<double, 1, 7> H;
+        ASSERT_TRUE(photometricResidual(x, img, *cam, T_imu_camera, p, A, level, row, col, r0, &H, &motion, &H_td));
+        for (int i = 0; i < 7; ++i) {  // dtheta, dp, then (6) t_d in place of the exposure column
+          // Steps that move the pixel by about one sample stride (see the test above).
+          const auto shifted = [&](double e) {
+            NavState s = x;
+            if (i < 6) {
+              StateVec d = StateVec::Zero();
+              d[i] = e;
+              s = x.boxplus(d);
+            } else {
+              s.time_offset_s += e;
+            }
+            return s;
+          };
+          const double moved = (capturePixel(shifted(1e-5)) - capturePixel(x)).norm();
+          const double eps = std::min(0.05, 1e-5 * double(1 << level) / std::max(moved, 1e-12));
+          double rp, rm;
+          ASSERT_TRUE(photometricResidual(shifted(eps), img, *cam, T_imu_camera, p, A, level, row, col, rp, nullptr, &motion));
+          ASSERT_TRUE(photometricResidual(shifted(-eps), img, *cam, T_imu_camera, p, A, level, row, col, rm, nullptr, &motion));
+          const double num = (rp - rm) / (2 * eps);
+          const double analytic = i < 6 ? H(i) : H_td;
+          // The capture pixel lies a few pixels off the reference here, where the image curves: the
+          // analytic gradient (axis-aligned central differences over the stride) and the numeric slope
+          // (along the motion) differ by more than at the reference (test above), so each sample gets
+          // a wider bound and the ratio's median a tight one.
+          EXPECT_NEAR(analytic, num, 0.5 * std::abs(num) + 3.0) << "level " << level << " column " << i;
+          if (std::abs(num) > 10.0) (i < 6 ? ratios_pose : ratios_td).push_back(analytic / num);
+          ++checked;
+        }
+      }
+  EXPECT_EQ(checked, 3 * 9 * 7);
+  for (std::vector<double>* r : {&ratios_pose, &ratios_td}) {
+    ASSERT_GE(r->size(), 10u);
+    std::nth_element(r->begin(), r->begin() + std::ptrdiff_t(r->size() / 2), r->end());
+    EXPECT_NEAR((*r)[r->size() / 2], 1.0, 0.1) << (r == &ratios_td ? "t_d" : "pose");
+  }
 }
 
 // The update's normal equations, built from per-point moments of the image gradient, intensity and

@@ -74,6 +74,7 @@ class FrameSink {
       announced_init_ = true;
     }
     if (r.lidarFailed()) counters_["lio_failed_frames"] += 1;
+    if (r.reset_time_offset) counters_["camera_time_offset_resets"] += 1;
     if (r.visual_used) {
       counters_["visual_points_used"] += r.n_visual_points;
       counters_["visual_longterm_points_used"] += r.n_longterm_visual_points;
@@ -111,6 +112,9 @@ class FrameSink {
     rec.n_planes_matched = r.lio.n_matched;
     rec.n_visual_points = r.n_visual_points;
     rec.n_longterm_visual_points = r.n_longterm_visual_points;
+    rec.has_time_offset = r.has_time_offset;
+    rec.time_offset_s = r.time_offset_s;
+    rec.time_offset_sigma_s = r.time_offset_sigma_s;
     rec.map_bytes = map_bytes_(r);
     return rec;
   }

@@ -64,6 +64,12 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   // 7. The frame's end at its final state: slides and the memory cap in process, the update message
   // to the map server. Visual point pointers of this frame are not used beyond this point.
   if (r.lio.initialized) map.finishFrame(frame, r);
+  if (!r.lio.initialized) time_offset_prior_set_ = false;  // a new start sets the prior again
+  if (cfg_.vio.estimate_time_offset && time_offset_prior_set_) {
+    r.has_time_offset = true;
+    r.time_offset_s = cfg_.preprocess.camera_time_offset_s + r.lio.state.time_offset_s;
+    r.time_offset_sigma_s = std::sqrt(std::max(0.0, r.lio.P(sidx::kTimeOffset, sidx::kTimeOffset)));
+  }
   r.total_ms = watch.elapsedMs();
   return r;
 }
@@ -140,9 +146,31 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   if (ops == nullptr) return;  // no visual update without the map's points
   NavState x = r.lio.state;
   StateCov P = r.lio.P;
+  // The camera's time offset t_d: its prior at the first visual frame after initialisation, reset to it
+  // when the estimate leaves 3 prior sigmas (never left to pull the pose).
+  constexpr int td = sidx::kTimeOffset;
+  const double var_td = cfg_.vio.time_offset_sigma_s * cfg_.vio.time_offset_sigma_s;
+  const auto resetTimeOffset = [&] {
+    x.time_offset_s = 0.0;
+    P.row(td).setZero();
+    P.col(td).setZero();
+    P(td, td) = var_td;
+  };
+  bool prior_changed = false;
+  if (cfg_.vio.estimate_time_offset && !time_offset_prior_set_) {
+    resetTimeOffset();
+    time_offset_prior_set_ = prior_changed = true;
+  }
+  CaptureMotion motion;  // the body rate at the image: the last IMU sample of the frame, bias removed
+  if (!frame.imu.empty()) motion.omega_imu = frame.imu.back().gyro - x.bg;
   const VisualStepResult vs = runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio,
-                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get());
-  if (vs.update.points_used > 0) lio_.setState(x, P);
+                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get(), motion);
+  if (cfg_.vio.estimate_time_offset && !(std::abs(x.time_offset_s) <= 3.0 * cfg_.vio.time_offset_sigma_s)) {
+    resetTimeOffset();
+    prior_changed = r.reset_time_offset = true;
+    ++time_offset_resets_;
+  }
+  if (vs.update.points_used > 0 || prior_changed) lio_.setState(x, P);
   selector_.markUsed(x);
   r.visual_used = true;
   r.n_visual_points = vs.update.points_used;

@@ -11,6 +11,7 @@ NavState NavState::boxplus(const StateVec& d) const {
   x.bg += d.segment<3>(sidx::kBg);
   x.ba += d.segment<3>(sidx::kBa);
   x.g_world += d.segment<3>(sidx::kGrav);
+  x.time_offset_s += d[sidx::kTimeOffset];
   return x;
 }
 
@@ -23,6 +24,7 @@ StateVec NavState::boxminus(const NavState& o) const {
   d.segment<3>(sidx::kBg) = bg - o.bg;
   d.segment<3>(sidx::kBa) = ba - o.ba;
   d.segment<3>(sidx::kGrav) = g_world - o.g_world;
+  d[sidx::kTimeOffset] = time_offset_s - o.time_offset_s;
   return d;
 }
 
@@ -36,7 +38,8 @@ Pose NavState::pose() const {
 StateCov initialCovariance() {
   StateCov P = StateCov::Identity() * 0.01;
   P(sidx::kExposure, sidx::kExposure) = 1e-5;
-  for (int i = sidx::kBg; i < kStateDim; ++i) P(i, i) = 1e-5;
+  for (int i = sidx::kBg; i < sidx::kGrav + 3; ++i) P(i, i) = 1e-5;
+  P(sidx::kTimeOffset, sidx::kTimeOffset) = 1e-6;
   return P;
 }
 

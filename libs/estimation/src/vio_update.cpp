@@ -8,7 +8,14 @@
 namespace livo {
 
 void VioConfig::load(const ConfigNode& root) {
-  if (root.has("camera")) root.section("camera").get("pixel_noise", pixel_noise);
+  if (root.has("camera")) {
+    const ConfigNode c = root.section("camera");
+    c.get("pixel_noise", pixel_noise).get("estimate_time_offset", estimate_time_offset);
+    c.get("time_offset_sigma_s", time_offset_sigma_s).get("rate_hz", camera_rate_hz);
+    c.check(camera_rate_hz > 0 && camera_rate_hz <= 1000, "rate_hz", "must be in (0, 1000] (the nominal image rate)");
+    c.check(std::isfinite(time_offset_sigma_s) && time_offset_sigma_s > 0 && time_offset_sigma_s <= 0.5 / camera_rate_hz,
+            "time_offset_sigma_s", "must be > 0 and at most half the image interval (0.5 / camera.rate_hz s)");
+  }
   const ConfigNode n = root.section("vio");
   n.get("max_iterations", max_iterations).get("outlier_rms", outlier_rms);
   n.get("estimate_exposure", estimate_exposure).get("normal_warp", normal_warp);
@@ -22,8 +29,10 @@ void VioConfig::load(const ConfigNode& root) {
 namespace {
 
 using Row7 = Eigen::Matrix<double, 1, 7>;
-using Mat7 = Eigen::Matrix<double, 7, 7>;
-using Vec7 = Eigen::Matrix<double, 7, 1>;
+using Mat8 = Eigen::Matrix<double, 8, 8>;
+using Vec8 = Eigen::Matrix<double, 8, 1>;
+/// The update's error-state entries: [dtheta, dp, dtau] and, last, dt_d (lin index 7).
+constexpr int kTd = 7;
 
 constexpr int kN = PatchPyramid::kSize;
 constexpr int kL = PatchPyramid::kLevels;
@@ -53,20 +62,44 @@ void precomputeReference(PointState& ps) {
 }
 
 struct Linearization {
-  Mat7 HtRH = Mat7::Zero();
-  Vec7 HtRz = Vec7::Zero();
+  Mat8 HtRH = Mat8::Zero();
+  Vec8 HtRz = Vec8::Zero();
   double cost = 0.0;
   std::size_t n = 0;
 };
 
-bool projectPoint(const NavState& x, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w, Vec3& p_i,
+/// The IMU pose at the capture time and what the Jacobians need of it, once per state.
+struct CapturePose {
+  bool shifted = false;        // t_d != 0: the capture pose differs from the state's
+  Mat3 R = Mat3::Identity();   // world <- imu at capture
+  Vec3 p = Vec3::Zero();
+  Mat3 R_omega = Mat3::Identity();  // Exp(omega t_d)
+  Vec3 omega = Vec3::Zero(), v_world = Vec3::Zero();
+  CapturePose(const NavState& x, const CaptureMotion& m)
+      : shifted(x.time_offset_s != 0.0), R(x.R_world_imu), p(x.p_world_imu), omega(m.omega_imu), v_world(x.v_world) {
+    if (!shifted) return;
+    R_omega = expSO3(m.omega_imu * x.time_offset_s);
+    R = x.R_world_imu * R_omega;
+    p = x.p_world_imu + x.v_world * x.time_offset_s;
+  }
+  Pose pose() const {
+    Pose T = Pose::Identity();
+    T.linear() = R;
+    T.translation() = p;
+    return T;
+  }
+};
+
+bool projectPoint(const CapturePose& cp, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w, Vec3& p_i,
                   Vec3& p_c, Vec2& px, Eigen::Matrix<double, 2, 3>* J) {
-  p_i = x.R_world_imu.transpose() * (p_w - x.p_world_imu);
+  p_i = cp.R.transpose() * (p_w - cp.p);
   p_c = T_imu_camera.linear().transpose() * (p_i - T_imu_camera.translation());
   return cam.project(p_c, px, J);
 }
 
 }  // namespace
+
+Pose imuPoseAtCapture(const NavState& x, const CaptureMotion& m) { return CapturePose(x, m).pose(); }
 
 Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& ref, const Pose& T_world_camera,
                                const CameraModel& cam) {
@@ -105,17 +138,26 @@ struct PointProjection {
   Vec2 px = Vec2::Zero();
   Eigen::Matrix<double, 2, 3> J_theta = Eigen::Matrix<double, 2, 3>::Zero();  // d px / d dtheta
   Eigen::Matrix<double, 2, 3> J_pos = Eigen::Matrix<double, 2, 3>::Zero();    // d px / d dp
+  Vec2 J_td = Vec2::Zero();                                                   // d px / d t_d (with_td)
 };
 
-bool projectForPatch(const NavState& x, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w,
-                     bool with_jacobian, PointProjection& out) {
+bool projectForPatch(const CapturePose& cp, const Pose& T_imu_camera, const CameraModel& cam, const Vec3& p_w,
+                     bool with_jacobian, PointProjection& out, bool with_td = false) {
   Vec3 p_c;
   Eigen::Matrix<double, 2, 3> J;
-  if (!projectPoint(x, T_imu_camera, cam, p_w, out.p_i, p_c, out.px, with_jacobian ? &J : nullptr)) return false;
+  if (!projectPoint(cp, T_imu_camera, cam, p_w, out.p_i, p_c, out.px, with_jacobian ? &J : nullptr)) return false;
   if (with_jacobian) {
     const Mat3 R_ci = T_imu_camera.linear().transpose();
-    out.J_theta = J * R_ci * hat(out.p_i);                          // p_i -> p_i + [p_i]x dtheta
-    out.J_pos = -J * R_ci * x.R_world_imu.transpose();              // p_i -> p_i - R^T dp
+    if (!cp.shifted) {
+      out.J_theta = J * R_ci * hat(out.p_i);                          // p_i -> p_i + [p_i]x dtheta
+      out.J_pos = -J * R_ci * cp.R.transpose();                       // p_i -> p_i - R^T dp
+    } else {
+      // R_capture = R Exp(dtheta) R_omega: p_i -> p_i + R_omega^T [R_omega p_i]x dtheta.
+      out.J_theta = J * R_ci * (cp.R_omega.transpose() * hat(cp.R_omega * out.p_i));
+      out.J_pos = -J * R_ci * cp.R.transpose();
+    }
+    // d p_i / d t_d = -omega x p_i - R_capture^T v (uniform motion over t_d).
+    if (with_td) out.J_td = J * R_ci * (-cp.omega.cross(out.p_i) - cp.R.transpose() * cp.v_world);
   }
   return true;
 }
@@ -123,7 +165,7 @@ bool projectForPatch(const NavState& x, const Pose& T_imu_camera, const CameraMo
 /// Residual of one patch pixel given the point's projection (see photometricResidual).
 bool pixelResidual(const NavState& x, const Image& gray, const VisualObservation& ref, const Eigen::Matrix2d& A,
                    const PointProjection& pp, int level, int row, int col, bool with_jacobian, double& r,
-                   Eigen::Matrix<double, 1, 7>* H) {
+                   Eigen::Matrix<double, 1, 7>* H, double* H_td) {
   const double stride = double(1 << level);
   const Vec2 o(patchOffset(col), patchOffset(row));  // level units
   const Vec2 u = pp.px + o * stride;
@@ -141,6 +183,7 @@ bool pixelResidual(const NavState& x, const Image& gray, const VisualObservation
     H->segment<3>(0) = g * pp.J_theta;
     H->segment<3>(3) = g * pp.J_pos;
     (*H)(6) = I;
+    if (H_td) *H_td = g * pp.J_td;
   }
   return true;
 }
@@ -149,12 +192,15 @@ bool pixelResidual(const NavState& x, const Image& gray, const VisualObservation
 
 bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
                          const VisualPoint& p, const Eigen::Matrix2d& A, int level, int row, int col, double& r,
-                         Row7* H) {
+                         Row7* H, const CaptureMotion* motion, double* H_td) {
   const VisualObservation* ref = p.referenceObs();
   if (!ref) return false;
   PointProjection pp;
-  if (!projectForPatch(x, T_imu_camera, cam, p.p_world, H != nullptr, pp)) return false;
-  return pixelResidual(x, gray, *ref, A, pp, level, row, col, H != nullptr, r, H);
+  NavState xs = x;
+  if (!motion) xs.time_offset_s = 0.0;  // without the motion the state's pose is the capture pose
+  const CapturePose cp(xs, motion ? *motion : CaptureMotion{});
+  if (!projectForPatch(cp, T_imu_camera, cam, p.p_world, H != nullptr, pp, H_td != nullptr)) return false;
+  return pixelResidual(x, gray, *ref, A, pp, level, row, col, H != nullptr, r, H, H_td);
 }
 
 namespace {
@@ -179,10 +225,10 @@ struct CurrentGrid {
 };
 
 /// RMS of a point's patch residuals at one level; -1 when fewer than half the samples are usable.
-double pointRms(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic, const PointState& ps,
-                int level) {
+double pointRms(const NavState& x, const CapturePose& cp, const Image& gray, const CameraModel& cam, const Pose& T_ic,
+                const PointState& ps, int level) {
   PointProjection pp;
-  if (!projectForPatch(x, T_ic, cam, ps.point->p_world, false, pp)) return -1.0;
+  if (!projectForPatch(cp, T_ic, cam, ps.point->p_world, false, pp)) return -1.0;
   CurrentGrid grid;
   grid.sample(gray, pp.px, level);
   double sq = 0;
@@ -238,28 +284,56 @@ PatchMoments patchMoments(const NavState& x, const CurrentGrid& grid, const Poin
 /// for every thread count.
 constexpr std::size_t kPointBlock = 8;
 
+/// What the update linearises: the capture pose at the state, whether t_d is estimated, the terms.
+struct LinearizeSpec {
+  const CaptureMotion* motion = nullptr;
+  int level = 0;
+  double inv_var = 1.0;
+  bool exposure = true;
+  bool time_offset = false;
+};
+
 /// Adds points [begin, end) of `pts` to `lin`.
-void linearizeBlock(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
-                    const std::vector<PointState>& pts, std::size_t begin, std::size_t end, int level, double inv_var,
-                    bool exposure, Linearization& out) {
+void linearizeBlock(const NavState& x, const CapturePose& cp, const Image& gray, const CameraModel& cam, const Pose& T_ic,
+                    const std::vector<PointState>& pts, std::size_t begin, std::size_t end, const LinearizeSpec& spec,
+                    Linearization& out) {
   Linearization lin;  // local, stored once at the end: no cache line shared with a neighbour block meanwhile
   CurrentGrid grid;
+  const double inv_var = spec.inv_var;
   for (std::size_t i = begin; i < end; ++i) {
     const PointState& ps = pts[i];
     if (!ps.used) continue;
     PointProjection pp;
-    if (!projectForPatch(x, T_ic, cam, ps.point->p_world, true, pp)) continue;
-    grid.sample(gray, pp.px, level);
-    const PatchMoments m = patchMoments(x, grid, ps, level);
+    if (!projectForPatch(cp, T_ic, cam, ps.point->p_world, true, pp, spec.time_offset)) continue;
+    grid.sample(gray, pp.px, spec.level);
+    const PatchMoments m = patchMoments(x, grid, ps, spec.level);
     if (m.n == 0) continue;
-    Eigen::Matrix<double, 2, 6> J;
-    J << pp.J_theta, pp.J_pos;
-    lin.HtRH.topLeftCorner<6, 6>().noalias() += inv_var * (J.transpose() * m.gg * J);
-    lin.HtRz.head<6>().noalias() += inv_var * (J.transpose() * m.gr);
-    if (exposure) {
-      const Eigen::Matrix<double, 6, 1> c = inv_var * (J.transpose() * m.gI);
-      lin.HtRH.block<6, 1>(0, 6) += c;
-      lin.HtRH.block<1, 6>(6, 0) += c.transpose();
+    if (!spec.time_offset) {
+      Eigen::Matrix<double, 2, 6> J;
+      J << pp.J_theta, pp.J_pos;
+      lin.HtRH.topLeftCorner<6, 6>().noalias() += inv_var * (J.transpose() * m.gg * J);
+      lin.HtRz.head<6>().noalias() += inv_var * (J.transpose() * m.gr);
+      if (spec.exposure) {
+        const Eigen::Matrix<double, 6, 1> c = inv_var * (J.transpose() * m.gI);
+        lin.HtRH.block<6, 1>(0, 6) += c;
+        lin.HtRH.block<1, 6>(6, 0) += c.transpose();
+      }
+    } else {
+      // The pixel rows [g J_theta, g J_pos, I, g J_td] in lin order [dtheta, dp, dtau, dt_d].
+      Eigen::Matrix<double, 2, 8> J = Eigen::Matrix<double, 2, 8>::Zero();
+      J.leftCols<3>() = pp.J_theta;
+      J.middleCols<3>(3) = pp.J_pos;
+      J.col(kTd) = pp.J_td;
+      lin.HtRH.noalias() += inv_var * (J.transpose() * m.gg * J);
+      lin.HtRz.noalias() += inv_var * (J.transpose() * m.gr);
+      if (spec.exposure) {
+        Vec8 c = inv_var * (J.transpose() * m.gI);
+        c(6) = 0.0;
+        lin.HtRH.col(6) += c;
+        lin.HtRH.row(6) += c.transpose();
+      }
+    }
+    if (spec.exposure) {
       lin.HtRH(6, 6) += inv_var * m.II;
       lin.HtRz(6) += inv_var * m.Ir;
     }
@@ -269,14 +343,14 @@ void linearizeBlock(const NavState& x, const Image& gray, const CameraModel& cam
   out = lin;
 }
 
-/// Normal equations of every used point at level `level`: blocks of points in parallel on `pool`,
-/// summed in block order.
+/// Normal equations of every used point at spec.level: blocks of points in parallel on `pool`, summed
+/// in block order.
 Linearization linearize(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_ic,
-                        const std::vector<PointState>& pts, int level, double inv_var, bool exposure,
-                        WorkerPool* pool) {
+                        const std::vector<PointState>& pts, const LinearizeSpec& spec, WorkerPool* pool) {
+  const CapturePose cp(x, spec.motion ? *spec.motion : CaptureMotion{});
   std::vector<Linearization> blocks((pts.size() + kPointBlock - 1) / kPointBlock);
   forRange(pool, pts.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
-    linearizeBlock(x, gray, cam, T_ic, pts, begin, end, level, inv_var, exposure, blocks[begin / kPointBlock]);
+    linearizeBlock(x, cp, gray, cam, T_ic, pts, begin, end, spec, blocks[begin / kPointBlock]);
   });
   Linearization lin;
   for (const Linearization& b : blocks) {
@@ -290,10 +364,11 @@ Linearization linearize(const NavState& x, const Image& gray, const CameraModel&
 
 /// Step 1. Per point: warp from the plane normal and the outlier gate at level 0 at the prior.
 /// Returns the squared RMS summed over the points used.
-double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
-                  const std::vector<VisualPoint*>& points, const VioConfig& cfg, std::vector<PointState>& pts,
-                  VioUpdateResult& res, WorkerPool* pool) {
-  const Pose T_world_camera = x.pose() * T_imu_camera;
+double gatePoints(const NavState& x, const CaptureMotion& motion, const Image& gray, const CameraModel& cam,
+                  const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg,
+                  std::vector<PointState>& pts, VioUpdateResult& res, WorkerPool* pool) {
+  const CapturePose cp(x, motion);
+  const Pose T_world_camera = cp.pose() * T_imu_camera;
   pts.assign(points.size(), PointState{});
   std::vector<double> rms(points.size(), -1.0);
   forRange(pool, points.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
@@ -304,7 +379,7 @@ double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, 
       if (!ps.ref) continue;
       if (cfg.normal_warp) ps.A = warpRefFromCur(*ps.point, *ps.ref, T_world_camera, cam);
       precomputeReference(ps);
-      rms[i] = pointRms(x, gray, cam, T_imu_camera, ps, 0);
+      rms[i] = pointRms(x, cp, gray, cam, T_imu_camera, ps, 0);
       ps.used = rms[i] >= 0 && rms[i] <= cfg.outlier_rms;
     }
   });
@@ -322,22 +397,27 @@ double gatePoints(const NavState& x, const Image& gray, const CameraModel& cam, 
 }
 
 /// Step 2. Coarse to fine: iterated updates per level, information form over [dtheta, dp, dtau] (the
-/// first 7 error-state entries), rolling back an iteration that raises the mean squared error.
-/// Returns false when no iteration linearised anything (P stays the prior); else `K_bar` is the
-/// posterior covariance of the last linearisation.
+/// first 7 error-state entries) and, when estimated, dt_d, rolling back an iteration that raises the
+/// mean squared error. Returns false when no iteration linearised anything (P stays the prior); else
+/// `K_bar` is the posterior covariance of the last linearisation.
 bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const CameraModel& cam,
                    const Pose& T_imu_camera, const std::vector<PointState>& pts, const VioConfig& cfg,
-                   StateCov& K_bar, VioUpdateResult& res, WorkerPool* pool) {
+                   const CaptureMotion& motion, StateCov& K_bar, VioUpdateResult& res, WorkerPool* pool) {
   const NavState x_prop = x;
-  const double inv_var = 1.0 / cfg.residualVariance();
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
   bool have_K = false;
   const double conv_rot = cfg.converge_rot_deg * M_PI / 180.0;
+  LinearizeSpec spec;
+  spec.motion = &motion;
+  spec.inv_var = 1.0 / cfg.residualVariance();
+  spec.exposure = cfg.estimate_exposure;
+  spec.time_offset = cfg.estimate_time_offset;
   for (int level = PatchPyramid::kLevels - 1; level >= 0; --level) {
+    spec.level = level;
     NavState x_prev = x;
     double prev_mse = std::numeric_limits<double>::infinity();
     for (int it = 0; it < cfg.max_iterations; ++it) {
-      const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, cfg.estimate_exposure, pool);
+      const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, spec, pool);
       if (lin.n == 0) break;
       const double mse = lin.cost / double(lin.n);
       if (mse > prev_mse) {  // the last step made things worse: undo it and end this level
@@ -348,12 +428,24 @@ bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const
       prev_mse = mse;
       x_prev = x;
       StateCov info = P_prop_inv;
-      info.topLeftCorner<7, 7>() += lin.HtRH;
-      K_bar = info.ldlt().solve(StateCov::Identity());
-      have_K = true;
       const StateVec Delta = x_prop.boxminus(x);
       StateVec g = StateVec::Zero();
-      g.head<7>() = lin.HtRz + lin.HtRH * Delta.head<7>();
+      info.topLeftCorner<7, 7>() += lin.HtRH.topLeftCorner<7, 7>();
+      if (!spec.time_offset) {
+        g.head<7>() = lin.HtRz.head<7>() + lin.HtRH.topLeftCorner<7, 7>() * Delta.head<7>();
+      } else {
+        constexpr int td = sidx::kTimeOffset;
+        info.block<7, 1>(0, td) += lin.HtRH.block<7, 1>(0, kTd);
+        info.block<1, 7>(td, 0) += lin.HtRH.block<1, 7>(kTd, 0);
+        info(td, td) += lin.HtRH(kTd, kTd);
+        Vec8 d8;
+        d8 << Delta.head<7>(), Delta(td);
+        const Vec8 g8 = lin.HtRz + lin.HtRH * d8;
+        g.head<7>() = g8.head<7>();
+        g(td) = g8(kTd);
+      }
+      K_bar = info.ldlt().solve(StateCov::Identity());
+      have_K = true;
       const StateVec delta = Delta - K_bar * g;
       x = x.boxplus(delta);
       ++res.iterations;
@@ -365,14 +457,16 @@ bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const
 }
 
 /// Step 4. Per-point errors and pixels at the posterior (the visual map drops points that stay bad).
-void posteriorErrors(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
-                     const std::vector<PointState>& pts, VioUpdateResult& res, WorkerPool* pool) {
-  const Pose T_cw_post = (x.pose() * T_imu_camera).inverse();
+void posteriorErrors(const NavState& x, const CaptureMotion& motion, const Image& gray, const CameraModel& cam,
+                     const Pose& T_imu_camera, const std::vector<PointState>& pts, VioUpdateResult& res,
+                     WorkerPool* pool) {
+  const CapturePose cp(x, motion);
+  const Pose T_cw_post = (cp.pose() * T_imu_camera).inverse();
   forRange(pool, pts.size(), kPointBlock, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       if (!pts[i].ref) continue;
       cam.project(T_cw_post * pts[i].point->p_world, res.point_px[i]);
-      if (pts[i].used) res.point_rms[i] = pointRms(x, gray, cam, T_imu_camera, pts[i], 0);
+      if (pts[i].used) res.point_rms[i] = pointRms(x, cp, gray, cam, T_imu_camera, pts[i], 0);
     }
   });
   double sq_after = 0;
@@ -403,10 +497,16 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
     precomputeReference(ps);
     pts.push_back(ps);
   }
-  const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, level, inv_var, exposure, nullptr);
+  NavState xs = x;
+  xs.time_offset_s = 0.0;  // the state's pose is the capture pose here
+  LinearizeSpec spec;
+  spec.level = level;
+  spec.inv_var = inv_var;
+  spec.exposure = exposure;
+  const Linearization lin = linearize(xs, gray, cam, T_imu_camera, pts, spec, nullptr);
   PhotometricNormalEquations out;
-  out.HtRH = lin.HtRH;
-  out.HtRz = lin.HtRz;
+  out.HtRH = lin.HtRH.topLeftCorner<7, 7>();
+  out.HtRz = lin.HtRz.head<7>();
   out.cost = lin.cost;
   out.pixels = lin.n;
   return out;
@@ -414,21 +514,21 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
 
 VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                              const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg,
-                             WorkerPool* pool) {
+                             WorkerPool* pool, const CaptureMotion& motion) {
   VioUpdateResult res;
   res.point_rms.assign(points.size(), -1.0);
   res.point_px.assign(points.size(), Vec2::Zero());
   // 1. Warps and the outlier gate at the prior.
   std::vector<PointState> pts;
-  const double sq_before = gatePoints(x, gray, cam, T_imu_camera, points, cfg, pts, res, pool);
+  const double sq_before = gatePoints(x, motion, gray, cam, T_imu_camera, points, cfg, pts, res, pool);
   if (res.points_used == 0) return res;
   res.rms_before = std::sqrt(sq_before / res.points_used);
   // 2. Iterated updates, coarse to fine.
   StateCov K_bar = P;
   // 3. Covariance once, from the last linearisation: P = (I - K_bar H^T R^-1 H) P_prop = K_bar.
-  if (iterateLevels(x, P, gray, cam, T_imu_camera, pts, cfg, K_bar, res, pool)) P = 0.5 * (K_bar + K_bar.transpose());
+  if (iterateLevels(x, P, gray, cam, T_imu_camera, pts, cfg, motion, K_bar, res, pool)) P = 0.5 * (K_bar + K_bar.transpose());
   // 4. Per-point errors at the posterior.
-  posteriorErrors(x, gray, cam, T_imu_camera, pts, res, pool);
+  posteriorErrors(x, motion, gray, cam, T_imu_camera, pts, res, pool);
   return res;
 }
 

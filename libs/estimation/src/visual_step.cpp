@@ -13,19 +13,19 @@ std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& p
 
 VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                                const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio,
-                               const NoScanRetrieval* no_scan, WorkerPool* pool) {
+                               const NoScanRetrieval* no_scan, WorkerPool* pool, const CaptureMotion& motion) {
   VisualStepResult r;
   // Retrieval: visual points in the voxels of the current scan (or of the camera frustum when the
-  // LiDAR failed), one per grid cell, not occluded.
-  r.points = map.pointsInView(cam, x.pose() * T_imu_camera, scanInWorld(x, lio.points),
+  // LiDAR failed), one per grid cell, not occluded, seen from the camera at its capture time.
+  r.points = map.pointsInView(cam, imuPoseAtCapture(x, motion) * T_imu_camera, scanInWorld(x, lio.points),
                               no_scan ? &no_scan->frustum_keys : nullptr);
 
   // Photometric update, sequential after the LiDAR one at the same time stamp.
-  if (!r.points.empty()) r.update = visualUpdate(x, P, gray, cam, T_imu_camera, r.points, vio, pool);
+  if (!r.points.empty()) r.update = visualUpdate(x, P, gray, cam, T_imu_camera, r.points, vio, pool, motion);
   const VioUpdateResult& vu = r.update;
 
   // Visual map at the posterior: errors, new observations, references/normals, new points.
-  const Pose T_world_camera = x.pose() * T_imu_camera;
+  const Pose T_world_camera = imuPoseAtCapture(x, motion) * T_imu_camera;
   const double gate = vio.outlier_rms * vio.outlier_rms;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     if (vu.point_rms.size() == r.points.size() && vu.point_rms[i] >= 0) {

@@ -2,6 +2,7 @@
 
 #include "message_checks.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -75,6 +76,10 @@ Validation checkStats(const livo::estimator_stats_t& m) {
                                                          {m.dropped_points, "dropped_points"}};
   for (const auto& c : counts)
     if (c.first < 0) return Validation::fail(std::string(c.second) + ": negative count " + std::to_string(c.first));
+  if (!std::isfinite(m.time_offset_s) || std::abs(m.time_offset_s) > 1e4)
+    return Validation::fail("time_offset_s: not a finite offset below 1e4 s");
+  if (!(m.time_offset_sigma_s >= 0) || !std::isfinite(m.time_offset_sigma_s))
+    return Validation::fail("time_offset_sigma_s: not a finite sigma >= 0");
   if (m.n_longterm_visual_points > m.n_visual_points)
     return Validation::fail("n_longterm_visual_points: " + std::to_string(m.n_longterm_visual_points) +
                             " more than n_visual_points " + std::to_string(m.n_visual_points));
@@ -182,6 +187,9 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.n_planes_matched = s.n_planes_matched;
   m.n_visual_points = s.n_visual_points;
   m.n_longterm_visual_points = s.n_longterm_visual_points;
+  m.has_time_offset = s.has_time_offset;
+  m.time_offset_s = s.time_offset_s;
+  m.time_offset_sigma_s = s.time_offset_sigma_s;
   m.dropped_points = s.dropped_points;
   return m;
 }
@@ -206,6 +214,9 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.n_planes_matched = m.n_planes_matched;
   out.n_visual_points = m.n_visual_points;
   out.n_longterm_visual_points = m.n_longterm_visual_points;
+  out.has_time_offset = m.has_time_offset != 0;
+  out.time_offset_s = m.time_offset_s;
+  out.time_offset_sigma_s = m.time_offset_sigma_s;
   out.dropped_points = m.dropped_points;
   return Validation::ok();
 }

@@ -54,7 +54,7 @@ RunOutputs::RunOutputs(const std::string& dir)
     : dir_(ensureDir(dir)), tum_(dir + "/trajectory.tum"), csv_(dir + "/frames.csv") {
   if (!csv_) throw std::runtime_error(dir + "/frames.csv: cannot open for writing");
   csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes,"
-          "n_longterm_points\n";
+          "n_longterm_points,time_offset_s,time_offset_sigma_s\n";
   csv_.flush();
 }
 
@@ -64,7 +64,11 @@ void RunOutputs::addFrame(const FrameRecord& f) {
   csv_ << std::fixed << std::setprecision(6) << toSeconds(f.utime) << std::setprecision(3) << ',' << f.lio_ms << ','
        << f.vio_ms << ',' << f.total_ms << ',' << std::setprecision(5) << f.sigma_min << ',' << int(f.degenerate)
        << ',' << int(f.visual_used) << ',' << f.n_points << ',' << f.n_planes_matched << ',' << f.n_visual_points
-       << ',' << f.map_bytes << ',' << f.n_longterm_visual_points << '\n';
+       << ',' << f.map_bytes << ',' << f.n_longterm_visual_points << ',';
+  if (f.has_time_offset)
+    csv_ << std::setprecision(7) << f.time_offset_s << ',' << f.time_offset_sigma_s << '\n';
+  else
+    csv_ << "nan,nan\n";
   csv_.flush();
   if (!csv_) throw std::runtime_error(dir_ + "/frames.csv: write failed");
 }
@@ -116,6 +120,12 @@ void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std
       os << ", \"bytes_lidar\": " << map.bytes_lidar << ", \"bytes_visual_local\": " << map.bytes_visual_local
          << ", \"bytes_visual_longterm\": " << map.bytes_visual_longterm << ", \"bytes_index\": " << map.bytes_index;
     os << "}";
+    for (auto it = records_.rbegin(); it != records_.rend(); ++it)
+      if (it->has_time_offset) {
+        os << ",\n  \"camera\": {\"time_offset_estimate_s\": " << num(it->time_offset_s)
+           << ", \"time_offset_sigma_s\": " << num(it->time_offset_sigma_s) << "}";
+        break;
+      }
     if (!counters.empty()) {
       os << ",\n  \"counters\": {";
       bool first = true;

@@ -132,6 +132,9 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   st.n_planes_matched = f.lio.n_matched;
   st.n_visual_points = f.n_visual_points;
   st.n_longterm_visual_points = f.n_longterm_visual_points;
+  st.has_time_offset = f.has_time_offset;
+  st.time_offset_s = f.time_offset_s;
+  st.time_offset_sigma_s = f.time_offset_sigma_s;
   st.dropped_points = std::int32_t(std::min<std::size_t>(nonfinite, 0x7fffffff));
   lcm_.publish(channels_.estimator_stats, toMsg(st));
   if (!f.lio.initialized) return;  // no pose yet
@@ -187,6 +190,8 @@ std::string EstimatorNode::summary() const {
   const ImageCheckCounters& ic = pipeline_.imageCounters();
   os << "camera failures: black " << ic.black << ", saturated " << ic.saturated << ", frozen " << ic.frozen
      << ", missing " << ic.missing << "\n";
+  if (pipeline_.config().vio.estimate_time_offset)
+    os << "camera time offset resets " << pipeline_.timeOffsetResets() << "\n";
   os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();

@@ -86,6 +86,9 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
     rec.n_planes_matched = s.n_planes_matched;
     rec.n_visual_points = s.n_visual_points;
     rec.n_longterm_visual_points = s.n_longterm_visual_points;
+    rec.has_time_offset = s.has_time_offset;
+    rec.time_offset_s = s.time_offset_s;
+    rec.time_offset_sigma_s = s.time_offset_sigma_s;
   } else {
     counters_["frames_without_stats"] += 1;
   }

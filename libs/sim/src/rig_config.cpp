@@ -74,6 +74,7 @@ void writeRigConfig(const SimScenario& sc, std::ostream& out) {
         << "  scale: 1.0\n"
         << "  T_imu_camera: " << pose(sc.extrinsics.T_imu_camera) << "\n"
         << "  time_offset_s: " << num(c.stamp_delay_s > 0.0 ? -c.stamp_delay_s : 0.0) << "\n"  // capture = stamp + offset
+        << "  rate_hz: " << num(c.rate_hz) << "\n"
         << (c.vignetting > 0.0 ? "  vignetting: " + num(c.vignetting) + "\n" : std::string())
         << "  pixel_noise: " << num(std::max(c.pixel_noise, 1.0)) << "\n\n";
   } else {

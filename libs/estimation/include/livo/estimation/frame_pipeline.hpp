@@ -46,6 +46,8 @@ class FramePipeline {
   std::size_t imagesWrongSize() const { return image_counters_.wrong_size; }
   /// Camera failures per kind (image_check.hpp): images never used by the visual update.
   const ImageCheckCounters& imageCounters() const { return image_counters_; }
+  /// camera.estimate_time_offset: times t_d left 3 prior sigmas and was reset to the prior.
+  std::size_t timeOffsetResets() const { return time_offset_resets_; }
 
  private:
   /// The frame's image at the processing scale in `scratch` or the frame itself; null without a
@@ -66,6 +68,8 @@ class FramePipeline {
   VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;
+  bool time_offset_prior_set_ = false;  ///< t_d's prior is in P (since the last initialisation)
+  std::size_t time_offset_resets_ = 0;
 };
 
 }  // namespace livo

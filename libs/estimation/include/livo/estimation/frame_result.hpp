@@ -34,6 +34,11 @@ struct FrameResult {
   int n_longterm_visual_points = 0;  ///< of n_visual_points, those that came through the long-term map
   double vio_rms_before = 0.0, vio_rms_after = 0.0;  ///< photometric RMS, gray levels
   double vio_ms = 0.0;
+  /// camera.estimate_time_offset: the camera's time offset after this frame (camera.time_offset_s +
+  /// the state's t_d) and its sigma, s; reset_time_offset: t_d left 3 prior sigmas and was reset.
+  bool has_time_offset = false;
+  double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
+  bool reset_time_offset = false;
   ImageStatus image = ImageStatus::Ok;  ///< a failed image (image_check.hpp) is never used
   MapUpdateReport map;         ///< step 7 in process: slides, evictions, bytes (estimate unless recounted), ms
   MapLinkReport link;          ///< steps 2, 6, 7 through the map server

@@ -1,8 +1,10 @@
 // The filter state of the error-state iterated Kalman filter (ALGORITHMS.md section 1).
 //
-// Error state (19-D, in this order): dtheta [0:3] (rotation, right perturbation R Exp(dtheta)),
+// Error state (20-D, in this order): dtheta [0:3] (rotation, right perturbation R Exp(dtheta)),
 // dp [3:6], dtau [6] (inverse exposure time relative to the first image, tau_0 = 1), dv [7:10],
-// dbg [10:13], dba [13:16], dg [16:19]. Everything but rotation is additive.
+// dbg [10:13], dba [13:16], dg [16:19], dt_d [19] (the camera's time offset beyond camera.time_offset_s,
+// estimated with camera.estimate_time_offset; otherwise no update touches it). Everything but rotation
+// is additive.
 #pragma once
 
 #include "livo/common/so3.hpp"
@@ -12,9 +14,9 @@
 
 namespace livo {
 
-constexpr int kStateDim = 19;
+constexpr int kStateDim = 20;
 namespace sidx {
-constexpr int kRot = 0, kPos = 3, kExposure = 6, kVel = 7, kBg = 10, kBa = 13, kGrav = 16;
+constexpr int kRot = 0, kPos = 3, kExposure = 6, kVel = 7, kBg = 10, kBa = 13, kGrav = 16, kTimeOffset = 19;
 }
 using StateVec = Eigen::Matrix<double, kStateDim, 1>;
 using StateCov = Eigen::Matrix<double, kStateDim, kStateDim>;
@@ -29,6 +31,8 @@ struct NavState {
   Vec3 bg = Vec3::Zero();  ///< gyro bias, rad/s
   Vec3 ba = Vec3::Zero();  ///< accelerometer bias, m/s^2
   Vec3 g_world = Vec3(0, 0, -9.81);
+  /// t_d, s: an image stamped (after camera.time_offset_s) at t was captured at t + t_d.
+  double time_offset_s = 0.0;
 
   /// x [+] delta.
   NavState boxplus(const StateVec& delta) const;
@@ -37,7 +41,9 @@ struct NavState {
   Pose pose() const;
 };
 
-/// Initial covariance (ALGORITHMS.md section 1): 0.01 I, with 1e-5 for tau, biases and gravity.
+/// Initial covariance (ALGORITHMS.md section 1): 0.01 I, with 1e-5 for tau, biases and gravity; t_d
+/// (1 ms)^2 as a placeholder that keeps P invertible: no Jacobian has a t_d column unless the offset is
+/// estimated, and then the pipeline sets its prior (camera.time_offset_sigma_s).
 StateCov initialCovariance();
 
 }  // namespace livo

@@ -27,8 +27,14 @@ struct VioConfig {
   bool normal_warp = true;         ///< affine warp from the plane normal (else identity)
   double converge_rot_deg = 0.001;
   double converge_pos_m = 1e-5;
+  /// camera.estimate_time_offset: t_d (NavState::time_offset_s) in the update, prior sigma
+  /// camera.time_offset_sigma_s, which must stay below half the image interval (camera.rate_hz).
+  bool estimate_time_offset = false;
+  double time_offset_sigma_s = 0.005;
+  double camera_rate_hz = 10.0;    ///< camera.rate_hz: nominal image rate (the offset's bounds)
 
-  /// Reads the `vio` section (and pixel_noise from `camera`).
+  /// Reads the `vio` section (and pixel_noise, estimate_time_offset, time_offset_sigma_s, rate_hz from
+  /// `camera`).
   void load(const ConfigNode& root);
   /// Residual variance used by the update, gray levels^2.
   double residualVariance() const { return pixel_noise * pixel_noise + model_noise * model_noise; }
@@ -45,11 +51,23 @@ struct VioUpdateResult {
   std::vector<Vec2> point_px;      ///< per input point, its pixel in the current image at the posterior
 };
 
-/// One residual of a patch pixel: r = tau_k I_k(u) - tau_r P_ref, and its row d r / d [dtheta, dp, dtau].
-/// Exposed for the Jacobian tests. Returns false when a sample falls outside the image or the crop.
+/// The body's motion at the image time, for an image captured t_d = x.time_offset_s after the state's
+/// time: angular rate (IMU frame, bias removed) and the state's velocity. The camera is taken to move
+/// uniformly over t_d: T_world_imu(capture) = [R Exp(omega t_d), p + v t_d].
+struct CaptureMotion {
+  Vec3 omega_imu = Vec3::Zero();
+};
+/// The IMU pose at the capture time (x.pose() exactly when t_d = 0).
+Pose imuPoseAtCapture(const NavState& x, const CaptureMotion& m);
+
+/// One residual of a patch pixel: r = tau_k I_k(u) - tau_r P_ref, and its row d r / d [dtheta, dp, dtau]
+/// (and, with `H_td`, d r / d t_d), the current pixel at the capture pose (imuPoseAtCapture with
+/// `motion`, or x.pose() without). Exposed for the Jacobian tests. Returns false when a sample falls
+/// outside the image or the crop.
 bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
                          const VisualPoint& p, const Eigen::Matrix2d& A_ref_from_cur, int level, int row, int col,
-                         double& r, Eigen::Matrix<double, 1, 7>* H);
+                         double& r, Eigen::Matrix<double, 1, 7>* H, const CaptureMotion* motion = nullptr,
+                         double* H_td = nullptr);
 
 /// The normal equations the update builds from `points` (each with a reference observation) at state x
 /// on one pyramid level: over every usable patch pixel, H^T H inv_var, H^T r inv_var, sum r^2 and the
@@ -74,8 +92,10 @@ Eigen::Matrix2d warpRefFromCur(const VisualPoint& p, const VisualObservation& re
 /// Runs the update. `points` come from the visual map's retrieval (each with a reference). With
 /// `pool`, the per-point work (warps, gates, patch sums) runs on its threads in fixed blocks summed in
 /// block order: the result is the same for every thread count, and the same as without a pool.
+/// The image was captured at the state's time + x.time_offset_s (`motion`); with
+/// cfg.estimate_time_offset the update estimates that offset with the pose.
 VioUpdateResult visualUpdate(NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                              const Pose& T_imu_camera, const std::vector<VisualPoint*>& points, const VioConfig& cfg,
-                             WorkerPool* pool = nullptr);
+                             WorkerPool* pool = nullptr, const CaptureMotion& motion = {});
 
 }  // namespace livo

@@ -126,6 +126,7 @@ struct NoScanRetrieval {
 };
 VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                                const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio,
-                               const NoScanRetrieval* no_scan = nullptr, WorkerPool* pool = nullptr);
+                               const NoScanRetrieval* no_scan = nullptr, WorkerPool* pool = nullptr,
+                               const CaptureMotion& motion = {});
 
 }  // namespace livo

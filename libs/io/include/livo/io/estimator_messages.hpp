@@ -62,6 +62,8 @@ struct EstimatorStats {
   std::int32_t n_planes_matched = 0;
   std::int32_t n_visual_points = 0;   ///< visual points used in the update
   std::int32_t n_longterm_visual_points = 0;  ///< of those, points that came through the long-term map
+  bool has_time_offset = false;  ///< camera.estimate_time_offset: the camera's time offset estimate, s
+  double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
   std::int32_t dropped_points = 0;    ///< NaN / out of range / blind
 };
 

@@ -4,9 +4,12 @@
 //                   n_points, n_planes_matched, n_visual_points, map_bytes, n_longterm_points (flushed
 //                   per row; map_bytes: the map's accounted bytes after the frame, 0 when unknown, e.g.
 //                   livo-exporter; n_longterm_points: of n_visual_points, those that came through the
-//                   long-term visual map, held by it or returned from it on a revisit)
+//                   long-term visual map, held by it or returned from it on a revisit),
+//                   time_offset_s, time_offset_sigma_s (camera.estimate_time_offset: the camera's time
+//                   offset estimate and its sigma; nan when not estimated)
 //   stats.json      frames, visual_frames, degenerate_frames, timed_frames, timing_ms {lio, vio,
 //                   vio_per_visual_frame, map, total} x {mean, median, p95, max}, peak_rss_mb, map
+//                   camera {time_offset_estimate_s, time_offset_sigma_s} (the last frame's, when estimated),
 //                   {local_voxels, visual_points_local, visual_points_longterm, bytes, and where the
 //                   map is in the process (livo-run) its parts bytes_lidar, bytes_visual_local,
 //                   bytes_visual_longterm, bytes_index}, plus
@@ -41,6 +44,9 @@ struct FrameRecord {
   int n_planes_matched = 0;
   int n_visual_points = 0;
   int n_longterm_visual_points = 0;  ///< of n_visual_points, those that came through the long-term map
+  /// camera.estimate_time_offset: the camera's time offset estimate and its sigma after the frame, s.
+  bool has_time_offset = false;
+  double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
   /// Accounted bytes of every map structure after this frame; 0 = unknown (livo-exporter) or not
   /// initialised. livo-run: the map's O(1) estimate with a memory cap, else an exact count every few
   /// frames carried forward (processes/livo-run/main.cpp).
