@@ -112,7 +112,7 @@ TEST(SimRig, RigConfigHasExactlyTheReadmeKeys) {
   cam.require("width", i);
   EXPECT_EQ(i, sc.camera.width);
   cam.require("height", i);
-  for (const char* k : {"fx", "fy", "cx", "cy", "scale", "time_offset_s", "pixel_noise"}) cam.require(k, d);
+  for (const char* k : {"fx", "fy", "cx", "cy", "scale", "time_offset_s", "rate_hz", "pixel_noise"}) cam.require(k, d);
   std::vector<double> dist;
   cam.require("distortion", dist);
   cam.require("T_imu_camera", T);
