@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <random>
 
 using namespace livo;
@@ -72,17 +73,30 @@ Vec2 pixelOf(const CameraModel& cam, const NavState& x, const Vec3& p_w) {
   return px;
 }
 
+/// The Jacobian tests' scene: a textured image, a pinhole camera at the IMU, one plane point 4 m ahead
+/// and a state slightly off the identity.
+struct JacobianScene {
+  Image img = syntheticImage(320, 240);
+  std::unique_ptr<CameraModel> cam = CameraModel::create(pinholeConfig(320, 240));
+  Pose T_imu_camera = Pose::Identity();
+  VisualPoint p = planePoint(*cam, img, Vec2(150.3, 110.7), 4.0);
+  NavState x;
+  JacobianScene() {
+    x.R_world_imu = expSO3(Vec3(0.002, -0.003, 0.001));
+    x.p_world_imu = Vec3(0.01, -0.005, 0.02);
+    x.inv_exposure = 1.1;
+  }
+};
+
 }  // namespace
 
 TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
-  const Image img = syntheticImage(320, 240);
-  const auto cam = CameraModel::create(pinholeConfig(320, 240));
-  const Pose T_imu_camera = Pose::Identity();
-  VisualPoint p = planePoint(*cam, img, Vec2(150.3, 110.7), 4.0);
-  NavState x;
-  x.R_world_imu = expSO3(Vec3(0.002, -0.003, 0.001));
-  x.p_world_imu = Vec3(0.01, -0.005, 0.02);
-  x.inv_exposure = 1.1;
+  const JacobianScene sc;
+  const Image& img = sc.img;
+  const auto& cam = sc.cam;
+  const Pose& T_imu_camera = sc.T_imu_camera;
+  const VisualPoint& p = sc.p;
+  const NavState& x = sc.x;
   const Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   int checked = 0;
   for (int level = 0; level < PatchPyramid::kLevels; ++level) {
@@ -122,15 +136,13 @@ TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
 // meanwhile. The rows with respect to dtheta and dp at the shifted capture pose, and d r / d t_d,
 // against numeric differences (of x.boxplus and of x.time_offset_s).
 TEST(VioUpdate, TimeOffsetJacobianMatchesNumericDifferences) {
-  const Image img = syntheticImage(320, 240);
-  const auto cam = CameraModel::create(pinholeConfig(320, 240));
-  const Pose T_imu_camera = Pose::Identity();
-  VisualPoint p = planePoint(*cam, img, Vec2(150.3, 110.7), 4.0);
-  NavState x;
-  x.R_world_imu = expSO3(Vec3(0.002, -0.003, 0.001));
-  x.p_world_imu = Vec3(0.01, -0.005, 0.02);
+  const JacobianScene sc;
+  const Image& img = sc.img;
+  const auto& cam = sc.cam;
+  const Pose& T_imu_camera = sc.T_imu_camera;
+  const VisualPoint& p = sc.p;
+  NavState x = sc.x;
   x.v_world = Vec3(0.8, -0.3, 0.4);
-  x.inv_exposure = 1.1;
   x.time_offset_s = -0.012;
   CaptureMotion motion;
   motion.omega_imu = Vec3(0.4, -0.9, 0.6);
