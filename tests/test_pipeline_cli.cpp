@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -54,10 +55,34 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
                             "\"local_voxels\"", "\"visual_points_local\"", "\"visual_points_longterm\"", "\"bytes\""})
       EXPECT_NE(stats.find(key), std::string::npos) << key;
     EXPECT_EQ(stats.find("\"visual_frames\": 0,") != std::string::npos, mode == "off") << stats.substr(0, 200);
+    EXPECT_EQ(stats.find("\"time_offset_estimate_s\""), std::string::npos) << "not estimated by default";
+    for (double v : livo::test::csvColumn(out / "frames.csv", "time_offset_s")) EXPECT_TRUE(std::isnan(v));
     const std::string pcd = slurp(out / "map.pcd");
     EXPECT_NE(pcd.find("FIELDS x y z rgb"), std::string::npos);
     EXPECT_EQ(slurp(out / "map.bt").rfind("# Octomap OcTree binary file", 0), 0u);
     EXPECT_EQ(run(bin("livo-eval") + " --gt " + gt + " --est " + (out / "trajectory.tum").string()), 0);
+  }
+  // camera.estimate_time_offset: the estimate and its sigma in frames.csv and stats.json.
+  {
+    std::string cfg = slurp(rig);
+    const std::size_t at = cfg.find("\n  rate_hz: 10.0\n");  // the camera's (the IMU's is 200)
+    ASSERT_NE(at, std::string::npos) << cfg;
+    cfg.insert(at + 1, "  estimate_time_offset: true\n");
+    std::ofstream(dir / "td.yaml") << cfg;
+    const fs::path out = dir / "out_td";
+    ASSERT_EQ(run(bin("livo-run") + " " + log + " --config " + (dir / "td.yaml").string() + " --out " + out.string() +
+                  " --visual-mode all --no-maps --quiet"),
+              0);
+    const std::vector<double> td = livo::test::csvColumn(out / "frames.csv", "time_offset_s"),
+                              sd = livo::test::csvColumn(out / "frames.csv", "time_offset_sigma_s");
+    ASSERT_FALSE(td.empty());
+    ASSERT_TRUE(std::isfinite(td.back()) && std::isfinite(sd.back()));
+    EXPECT_LE(std::abs(td.back()), 3 * 0.005);      // within the reset bound of the default prior
+    EXPECT_GT(sd.back(), 0.0);
+    EXPECT_LT(sd.back(), 0.005);                     // the images have narrowed the prior
+    const std::string stats = slurp(out / "stats.json");
+    EXPECT_NE(stats.find("\"time_offset_estimate_s\""), std::string::npos) << stats;
+    EXPECT_NE(stats.find("\"time_offset_sigma_s\""), std::string::npos) << stats;
   }
   // A bad config key and a missing log fail with a non-zero exit, never a crash.
   std::ofstream(dir / "bad.yaml") << slurp(rig) << "lio:\n  max_iteratons: 3\n";
