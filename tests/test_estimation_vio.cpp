@@ -92,11 +92,7 @@ struct JacobianScene {
 
 TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
   const JacobianScene sc;
-  const Image& img = sc.img;
-  const auto& cam = sc.cam;
-  const Pose& T_imu_camera = sc.T_imu_camera;
-  const VisualPoint& p = sc.p;
-  const NavState& x = sc.x;
+  const auto& [img, cam, T_imu_camera, p, x] = sc;
   const Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
   int checked = 0;
   for (int level = 0; level < PatchPyramid::kLevels; ++level) {
@@ -137,18 +133,15 @@ TEST(VioUpdate, PhotometricJacobianMatchesNumericDifferences) {
 // against numeric differences (of x.boxplus and of x.time_offset_s).
 TEST(VioUpdate, TimeOffsetJacobianMatchesNumericDifferences) {
   const JacobianScene sc;
-  const Image& img = sc.img;
-  const auto& cam = sc.cam;
-  const Pose& T_imu_camera = sc.T_imu_camera;
-  const VisualPoint& p = sc.p;
-  NavState x = sc.x;
+  const auto& [img, cam, T_imu_camera, p, x_scene] = sc;
+  NavState x = x_scene;
   x.v_world = Vec3(0.8, -0.3, 0.4);
   x.time_offset_s = -0.012;
   CaptureMotion motion;
   motion.omega_imu = Vec3(0.4, -0.9, 0.6);
-  const auto capturePixel = [&](const NavState& s) {
+  const auto capturePixel = [&](const NavState& s) {  // through sc: C++17 lambdas cannot capture bindings
     Vec2 px;
-    cam->project(imuPoseAtCapture(s, motion).inverse() * p.p_world, px);
+    sc.cam->project(imuPoseAtCapture(s, motion).inverse() * sc.p.p_world, px);
     return px;
   };
   // The capture pose moves the pixel (the test is not degenerate), and it is the uniform motion.

@@ -27,7 +27,7 @@ TEST(MapFile, OlderVersionsLoad) {
   auto lt = visualPoint(43, Vec3(4, 5, 6));
   for (int i = 0; i < PatchPyramid::kValues; ++i) lt->obs[0].patch.values[std::size_t(i)] = std::uint8_t((i * 11 + 5) % 253);
   const PatchPyramid stored43 = lt->obs[0].patch;
-  lt->from_longterm = false;  // inserted directly: the long-term section gives the flag on loading
+  lt->from_longterm = false;  // the long-term map marks what it takes, here and on loading
   ASSERT_TRUE(map.visual().longterm().insert(std::move(lt)));
   std::ostringstream v3;
   saveMap(v3, map);

@@ -68,20 +68,19 @@ struct Linearization {
   std::size_t n = 0;
 };
 
-/// The IMU pose at the capture time and what the Jacobians need of it, once per state.
+/// The IMU pose at the capture time and what the Jacobians need of it, once per state (t_d = 0: the
+/// state's pose, R_omega the identity).
 struct CapturePose {
-  bool shifted = false;        // t_d != 0: the capture pose differs from the state's
-  Mat3 R = Mat3::Identity();   // world <- imu at capture
-  Vec3 p = Vec3::Zero();
-  Mat3 R_omega = Mat3::Identity();  // Exp(omega t_d)
-  Vec3 omega = Vec3::Zero(), v_world = Vec3::Zero();
+  Mat3 R_omega;  // Exp(omega t_d)
+  Mat3 R;        // world <- imu at capture
+  Vec3 p;
+  Vec3 omega, v_world;
   CapturePose(const NavState& x, const CaptureMotion& m)
-      : shifted(x.time_offset_s != 0.0), R(x.R_world_imu), p(x.p_world_imu), omega(m.omega_imu), v_world(x.v_world) {
-    if (!shifted) return;
-    R_omega = expSO3(m.omega_imu * x.time_offset_s);
-    R = x.R_world_imu * R_omega;
-    p = x.p_world_imu + x.v_world * x.time_offset_s;
-  }
+      : R_omega(expSO3(m.omega_imu * x.time_offset_s)),
+        R(x.R_world_imu * R_omega),
+        p(x.p_world_imu + x.v_world * x.time_offset_s),
+        omega(m.omega_imu),
+        v_world(x.v_world) {}
   Pose pose() const {
     Pose T = Pose::Identity();
     T.linear() = R;
@@ -148,14 +147,9 @@ bool projectForPatch(const CapturePose& cp, const Pose& T_imu_camera, const Came
   if (!projectPoint(cp, T_imu_camera, cam, p_w, out.p_i, p_c, out.px, with_jacobian ? &J : nullptr)) return false;
   if (with_jacobian) {
     const Mat3 R_ci = T_imu_camera.linear().transpose();
-    if (!cp.shifted) {
-      out.J_theta = J * R_ci * hat(out.p_i);                          // p_i -> p_i + [p_i]x dtheta
-      out.J_pos = -J * R_ci * cp.R.transpose();                       // p_i -> p_i - R^T dp
-    } else {
-      // R_capture = R Exp(dtheta) R_omega: p_i -> p_i + R_omega^T [R_omega p_i]x dtheta.
-      out.J_theta = J * R_ci * (cp.R_omega.transpose() * hat(cp.R_omega * out.p_i));
-      out.J_pos = -J * R_ci * cp.R.transpose();
-    }
+    // R_capture = R Exp(dtheta) R_omega: p_i -> p_i + R_omega^T [R_omega p_i]x dtheta; p_i -> p_i - R_capture^T dp.
+    out.J_theta = J * R_ci * (cp.R_omega.transpose() * hat(cp.R_omega * out.p_i));
+    out.J_pos = -J * R_ci * cp.R.transpose();
     // d p_i / d t_d = -omega x p_i - R_capture^T v (uniform motion over t_d).
     if (with_td) out.J_td = J * R_ci * (-cp.omega.cross(out.p_i) - cp.R.transpose() * cp.v_world);
   }
@@ -196,9 +190,7 @@ bool photometricResidual(const NavState& x, const Image& gray, const CameraModel
   const VisualObservation* ref = p.referenceObs();
   if (!ref) return false;
   PointProjection pp;
-  NavState xs = x;
-  if (!motion) xs.time_offset_s = 0.0;  // without the motion the state's pose is the capture pose
-  const CapturePose cp(xs, motion ? *motion : CaptureMotion{});
+  const CapturePose cp(x, motion ? *motion : CaptureMotion{});
   if (!projectForPatch(cp, T_imu_camera, cam, p.p_world, H != nullptr, pp, H_td != nullptr)) return false;
   return pixelResidual(x, gray, *ref, A, pp, level, row, col, H != nullptr, r, H, H_td);
 }
@@ -293,6 +285,37 @@ struct LinearizeSpec {
   bool time_offset = false;
 };
 
+/// Adds one point's patch to the normal equations: the pixel rows are [g J_theta, g J_pos, I, g J_td] in
+/// lin order [dtheta, dp, dtau, dt_d]; J (2 x kJ) is their image-gradient part without the dtau column,
+/// kJ = 7 with the dt_d column (lin index kTd) when t_d is estimated, 6 without (its entries stay 0).
+template <int kJ>
+void addPointRows(const PointProjection& pp, const PatchMoments& m, double inv_var, bool exposure, Linearization& lin) {
+  Eigen::Matrix<double, 2, kJ> J;
+  J.template leftCols<3>() = pp.J_theta;
+  J.template middleCols<3>(3) = pp.J_pos;
+  if constexpr (kJ == 7) J.col(6) = pp.J_td;
+  const Eigen::Matrix<double, kJ, kJ> JgJ = inv_var * (J.transpose() * m.gg * J);
+  const Eigen::Matrix<double, kJ, 1> Jgr = inv_var * (J.transpose() * m.gr);
+  lin.HtRH.topLeftCorner<6, 6>() += JgJ.template topLeftCorner<6, 6>();
+  lin.HtRz.head<6>() += Jgr.template head<6>();
+  if constexpr (kJ == 7) {
+    lin.HtRH.block<6, 1>(0, kTd) += JgJ.template block<6, 1>(0, 6);
+    lin.HtRH.block<1, 6>(kTd, 0) += JgJ.template block<1, 6>(6, 0);
+    lin.HtRH(kTd, kTd) += JgJ(6, 6);
+    lin.HtRz(kTd) += Jgr(6);
+  }
+  if (!exposure) return;
+  const Eigen::Matrix<double, kJ, 1> c = inv_var * (J.transpose() * m.gI);
+  lin.HtRH.block<6, 1>(0, 6) += c.template head<6>();
+  lin.HtRH.block<1, 6>(6, 0) += c.template head<6>().transpose();
+  if constexpr (kJ == 7) {
+    lin.HtRH(kTd, 6) += c(6);
+    lin.HtRH(6, kTd) += c(6);
+  }
+  lin.HtRH(6, 6) += inv_var * m.II;
+  lin.HtRz(6) += inv_var * m.Ir;
+}
+
 /// Adds points [begin, end) of `pts` to `lin`.
 void linearizeBlock(const NavState& x, const CapturePose& cp, const Image& gray, const CameraModel& cam, const Pose& T_ic,
                     const std::vector<PointState>& pts, std::size_t begin, std::size_t end, const LinearizeSpec& spec,
@@ -308,35 +331,10 @@ void linearizeBlock(const NavState& x, const CapturePose& cp, const Image& gray,
     grid.sample(gray, pp.px, spec.level);
     const PatchMoments m = patchMoments(x, grid, ps, spec.level);
     if (m.n == 0) continue;
-    if (!spec.time_offset) {
-      Eigen::Matrix<double, 2, 6> J;
-      J << pp.J_theta, pp.J_pos;
-      lin.HtRH.topLeftCorner<6, 6>().noalias() += inv_var * (J.transpose() * m.gg * J);
-      lin.HtRz.head<6>().noalias() += inv_var * (J.transpose() * m.gr);
-      if (spec.exposure) {
-        const Eigen::Matrix<double, 6, 1> c = inv_var * (J.transpose() * m.gI);
-        lin.HtRH.block<6, 1>(0, 6) += c;
-        lin.HtRH.block<1, 6>(6, 0) += c.transpose();
-      }
-    } else {
-      // The pixel rows [g J_theta, g J_pos, I, g J_td] in lin order [dtheta, dp, dtau, dt_d].
-      Eigen::Matrix<double, 2, 8> J = Eigen::Matrix<double, 2, 8>::Zero();
-      J.leftCols<3>() = pp.J_theta;
-      J.middleCols<3>(3) = pp.J_pos;
-      J.col(kTd) = pp.J_td;
-      lin.HtRH.noalias() += inv_var * (J.transpose() * m.gg * J);
-      lin.HtRz.noalias() += inv_var * (J.transpose() * m.gr);
-      if (spec.exposure) {
-        Vec8 c = inv_var * (J.transpose() * m.gI);
-        c(6) = 0.0;
-        lin.HtRH.col(6) += c;
-        lin.HtRH.row(6) += c.transpose();
-      }
-    }
-    if (spec.exposure) {
-      lin.HtRH(6, 6) += inv_var * m.II;
-      lin.HtRz(6) += inv_var * m.Ir;
-    }
+    if (spec.time_offset)
+      addPointRows<7>(pp, m, inv_var, spec.exposure, lin);
+    else
+      addPointRows<6>(pp, m, inv_var, spec.exposure, lin);
     lin.cost += m.rr;
     lin.n += m.n;
   }
@@ -430,20 +428,17 @@ bool iterateLevels(NavState& x, const StateCov& P_prop, const Image& gray, const
       StateCov info = P_prop_inv;
       const StateVec Delta = x_prop.boxminus(x);
       StateVec g = StateVec::Zero();
+      // The update's 8 entries in the state: the first 7 and t_d (a zero row and column unless estimated).
+      constexpr int td = sidx::kTimeOffset;
       info.topLeftCorner<7, 7>() += lin.HtRH.topLeftCorner<7, 7>();
-      if (!spec.time_offset) {
-        g.head<7>() = lin.HtRz.head<7>() + lin.HtRH.topLeftCorner<7, 7>() * Delta.head<7>();
-      } else {
-        constexpr int td = sidx::kTimeOffset;
-        info.block<7, 1>(0, td) += lin.HtRH.block<7, 1>(0, kTd);
-        info.block<1, 7>(td, 0) += lin.HtRH.block<1, 7>(kTd, 0);
-        info(td, td) += lin.HtRH(kTd, kTd);
-        Vec8 d8;
-        d8 << Delta.head<7>(), Delta(td);
-        const Vec8 g8 = lin.HtRz + lin.HtRH * d8;
-        g.head<7>() = g8.head<7>();
-        g(td) = g8(kTd);
-      }
+      info.block<7, 1>(0, td) += lin.HtRH.block<7, 1>(0, kTd);
+      info.block<1, 7>(td, 0) += lin.HtRH.block<1, 7>(kTd, 0);
+      info(td, td) += lin.HtRH(kTd, kTd);
+      Vec8 d8;
+      d8 << Delta.head<7>(), Delta(td);
+      const Vec8 g8 = lin.HtRz + lin.HtRH * d8;
+      g.head<7>() = g8.head<7>();
+      g(td) = g8(kTd);
       K_bar = info.ldlt().solve(StateCov::Identity());
       have_K = true;
       const StateVec delta = Delta - K_bar * g;
@@ -497,13 +492,11 @@ PhotometricNormalEquations photometricNormalEquations(const NavState& x, const I
     precomputeReference(ps);
     pts.push_back(ps);
   }
-  NavState xs = x;
-  xs.time_offset_s = 0.0;  // the state's pose is the capture pose here
   LinearizeSpec spec;
   spec.level = level;
   spec.inv_var = inv_var;
   spec.exposure = exposure;
-  const Linearization lin = linearize(xs, gray, cam, T_imu_camera, pts, spec, nullptr);
+  const Linearization lin = linearize(x, gray, cam, T_imu_camera, pts, spec, nullptr);
   PhotometricNormalEquations out;
   out.HtRH = lin.HtRH.topLeftCorner<7, 7>();
   out.HtRz = lin.HtRz.head<7>();

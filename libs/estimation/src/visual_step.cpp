@@ -29,7 +29,7 @@ VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, cons
   const double gate = vio.outlier_rms * vio.outlier_rms;
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     if (vu.point_rms.size() == r.points.size() && vu.point_rms[i] >= 0) {
-      r.n_longterm_used += r.points[i]->from_longterm || map.isLongterm(*r.points[i]);
+      r.n_longterm_used += r.points[i]->from_longterm;
       map.reportPhotometricError(*r.points[i], vu.point_rms[i] * vu.point_rms[i], gate);
       if (map.addObservation(*r.points[i], gray, T_world_camera, vu.point_px[i], float(x.inv_exposure), t))
         map.refine(*r.points[i]);

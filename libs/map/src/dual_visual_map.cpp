@@ -10,7 +10,7 @@
 
 namespace livo {
 
-DualVisualMap::DualVisualMap(const VisualMapConfig& config) : local_(config), longterm_(config) {}
+DualVisualMap::DualVisualMap(const VisualMapConfig& config) : local_(config), longterm_(config, true) {}
 
 std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                                       const std::vector<Vec3>& scan_points_world,
@@ -113,18 +113,17 @@ bool DualVisualMap::upsert(VisualPoint p) {
   if (!p.obs.empty() && (!p.p_world.allFinite() || p.reference < -1 || p.reference >= int(p.obs.size()))) return false;
   VisualMap* owner = &local_;
   std::size_t old_obs = 0;
-  bool old_from_longterm = false;
+  bool returned = false;  // the point came back from the long-term map to the local one
   if (auto old = local_.extract(p.id)) {
     old_obs = old->obs.size();
-    old_from_longterm = old->from_longterm;
+    returned = old->from_longterm;
   } else if (auto old_lt = longterm_.extract(p.id)) {
-    owner = &longterm_;
+    owner = &longterm_;  // which marks it on insertion
     old_obs = old_lt->obs.size();
-    old_from_longterm = true;
   }
   if (p.obs.empty()) return true;  // a removal
   // The sender's copy may predate the point's move to the long-term map.
-  p.from_longterm = p.from_longterm || old_from_longterm;
+  p.from_longterm = p.from_longterm || returned;
   if (p.obs.size() > old_obs) added_observations_ += p.obs.size() - old_obs;
   return owner->insert(std::make_unique<VisualPoint>(std::move(p)));
 }

@@ -120,14 +120,11 @@ void saveVisual(std::ostream& os, const VisualMap& m) {
   m.forEach([&os](const VisualPoint& p) { putVisualPoint(os, p); });
 }
 
-/// `longterm`: the section of the long-term map (its points have from_longterm whatever the file says).
-std::size_t loadVisual(std::istream& is, std::uint32_t version, VisualMap& m, bool longterm) {
+std::size_t loadVisual(std::istream& is, std::uint32_t version, VisualMap& m) {
   const auto n = get<std::uint64_t>(is, "visual point count");
   if (n > kMaxVisualPoints) throw std::runtime_error("visual point count " + std::to_string(n) + " over the limit");
   for (std::uint64_t i = 0; i < n; ++i) {
-    auto p = std::make_unique<VisualPoint>(getVisualPoint(is, version));
-    p->from_longterm = p->from_longterm || longterm;
-    if (!m.insert(std::move(p)))
+    if (!m.insert(std::make_unique<VisualPoint>(getVisualPoint(is, version))))
       throw std::runtime_error("visual point " + std::to_string(i) + ": duplicate id or bad position");
   }
   return std::size_t(n);
@@ -149,8 +146,8 @@ void loadContent(std::istream& is, std::uint32_t version, HybridMap& map) {
   map.clear();
   try {
     map.lidar().load(is);
-    loadVisual(is, version, map.visual().local(), false);
-    loadVisual(is, version, map.visual().longterm(), true);
+    loadVisual(is, version, map.visual().local());
+    loadVisual(is, version, map.visual().longterm());  // marks its points (VisualMap's long-term flag)
   } catch (...) {
     map.clear();
     throw;

@@ -96,7 +96,6 @@ bool SlidePolicy::moveToLongterm(std::int64_t id, MapWork& work) {
     p->reference = 0;
   }
   p->obs.shrink_to_fit();
-  p->from_longterm = true;
   if (!work.visual.longterm().insert(std::move(p))) {
     ++work.rep.deleted_points;
     ++work.total.deleted_points;

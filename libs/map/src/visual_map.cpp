@@ -47,7 +47,9 @@ int ImageGrid::cellOf(const Vec2& px) const {
   return r * cols + c;
 }
 
-VisualMap::VisualMap(VisualMapConfig config) : config_(std::move(config)) { config_.validate(); }
+VisualMap::VisualMap(VisualMapConfig config, bool longterm) : config_(std::move(config)), longterm_(longterm) {
+  config_.validate();
+}
 VisualMap::~VisualMap() = default;
 VisualMap::VisualMap(VisualMap&&) noexcept = default;
 VisualMap& VisualMap::operator=(VisualMap&&) noexcept = default;
@@ -321,6 +323,7 @@ std::unique_ptr<VisualPoint> VisualMap::extract(std::int64_t id) {
 bool VisualMap::insert(std::unique_ptr<VisualPoint> point) {
   if (!point || !keyable(point->p_world, config_.voxel_size_m) || by_id_.count(point->id) > 0) return false;
   next_id_ = std::max(next_id_, point->id + 1);
+  point->from_longterm = point->from_longterm || longterm_;
   VisualPoint* raw = point.get();
   by_id_.emplace(raw->id, std::move(point));
   index(raw);

@@ -270,7 +270,8 @@ Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
   const double t_rel = relTime(t_capture);
   for (std::size_t i = 0; i + 1 < cc.exposure_steps.size(); i += 2)
     if (t_rel >= cc.exposure_steps[i]) gain *= cc.exposure_steps[i + 1];
-  // Motion blur: the radiance averaged over poses at the centres of n equal parts of the exposure.
+  // Motion blur: the radiance averaged over poses at the centres of n equal parts of the exposure
+  // (n = 1: the pose at the capture time, weight 1).
   const int n = blurSamples(k);
   if (truth) {
     truth->T_world_camera = T_wc;
@@ -280,13 +281,9 @@ Image Simulator::renderImage(std::int64_t k, ImageTruth* truth) const {
   }
   const std::size_t width = static_cast<std::size_t>(img.width);
   std::vector<double> radiance(width * static_cast<std::size_t>(img.height), 0.0);
-  if (n == 1) {
-    accumulateRadiance(T_wc, 1.0, radiance);
-  } else {
-    for (int s = 0; s < n; ++s) {
-      const double dt = cc.exposure_time_s * ((s + 0.5) / n - 0.5);
-      accumulateRadiance(T_world_camera(t_capture + fromSeconds(dt)), 1.0 / n, radiance);
-    }
+  for (int s = 0; s < n; ++s) {
+    const double dt = cc.exposure_time_s * ((s + 0.5) / n - 0.5);
+    accumulateRadiance(T_world_camera(t_capture + fromSeconds(dt)), 1.0 / n, radiance);
   }
   // Vignetting 1 - k r^2, r the distance from the principal point over that of the farthest corner.
   double r2_corner = 0.0;

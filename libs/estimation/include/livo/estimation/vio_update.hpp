@@ -62,7 +62,7 @@ Pose imuPoseAtCapture(const NavState& x, const CaptureMotion& m);
 
 /// One residual of a patch pixel: r = tau_k I_k(u) - tau_r P_ref, and its row d r / d [dtheta, dp, dtau]
 /// (and, with `H_td`, d r / d t_d), the current pixel at the capture pose (imuPoseAtCapture with
-/// `motion`, or x.pose() without). Exposed for the Jacobian tests. Returns false when a sample falls
+/// `motion`; without it, zero angular rate). Exposed for the Jacobian tests. Returns false when a sample falls
 /// outside the image or the crop.
 bool photometricResidual(const NavState& x, const Image& gray, const CameraModel& cam, const Pose& T_imu_camera,
                          const VisualPoint& p, const Eigen::Matrix2d& A_ref_from_cur, int level, int row, int col,

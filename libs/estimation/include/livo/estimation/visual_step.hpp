@@ -37,8 +37,6 @@ class VisualMapOps {
   virtual int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
                         Utime t, const std::vector<NewPointCandidate>& candidates,
                         const std::vector<bool>& occupied_cells) = 0;
-  /// Whether `p` belongs to a long-term visual map (false where the map has none, or does not know).
-  virtual bool isLongterm(const VisualPoint& /*p*/) const { return false; }
 };
 
 /// Forwards every VisualMapOps call except refine() to a map with VisualMap's per-frame operations.
@@ -72,7 +70,6 @@ class HybridVisualOps final : public VisualOpsOn<DualVisualMap> {
   explicit HybridVisualOps(HybridMap& map) : VisualOpsOn(map.visual()), planes_(&map.lidar().voxels()) {}
   void refine(VisualPoint& p) override { map_.refine(p, planes_); }
   const PlaneFinder* planes() const override { return planes_; }
-  bool isLongterm(const VisualPoint& p) const override { return map_.isLongterm(p); }
 
  private:
   const PlaneFinder* planes_;

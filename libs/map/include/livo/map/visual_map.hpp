@@ -74,7 +74,9 @@ bool winsCell(const VisualPoint& p, double z, const VisualPoint* best, double be
 
 class VisualMap {
  public:
-  explicit VisualMap(VisualMapConfig config = {});
+  /// `longterm`: the long-term visual map: every point it takes (insert) is marked
+  /// VisualPoint::from_longterm, the one place that mark is made.
+  explicit VisualMap(VisualMapConfig config = {}, bool longterm = false);
   ~VisualMap();
   VisualMap(VisualMap&&) noexcept;
   VisualMap& operator=(VisualMap&&) noexcept;
@@ -187,6 +189,7 @@ class VisualMap {
   void unindex(const VisualPoint* p);
 
   VisualMapConfig config_;
+  bool longterm_ = false;
   std::unordered_map<std::int64_t, std::unique_ptr<VisualPoint>> by_id_;
   std::unordered_map<VoxelKey, std::vector<VisualPoint*>, VoxelKeyHash> voxels_;
   std::int64_t next_id_ = 1;
