@@ -1,5 +1,9 @@
 #include "livo/estimation/frame_selector.hpp"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -20,7 +24,59 @@ double FrameSelector::rotationThreshold(double sigma_min) const {
   return std::sqrt(3.0) * sigma_min * cfg_.tau_rotation_deg * M_PI / 180.0;
 }
 
-bool FrameSelector::select(const NavState& x, double sigma_min, bool degenerate) const {
+namespace {
+
+using Mat3d = Eigen::Matrix3d;
+static_assert(sidx::kRot == 0 && sidx::kPos == 3, "PoseInfo holds the rotation, then the position");
+
+/// P_after^-1 - P_before^-1 of one 3x3 marginal, symmetric positive semi-definite (zero when either
+/// is not positive definite).
+Mat3d marginalGain(const Mat3d& before, const Mat3d& after) {
+  const Eigen::LLT<Mat3d> b(before), a(after);
+  if (b.info() != Eigen::Success || a.info() != Eigen::Success) return Mat3d::Zero();
+  Mat3d I = a.solve(Mat3d::Identity()) - b.solve(Mat3d::Identity());
+  I = 0.5 * (I + I.transpose()).eval();
+  // Rounding can leave small negative eigenvalues: an update never removes information.
+  const Eigen::SelfAdjointEigenSolver<Mat3d> es(I);
+  if (es.info() != Eigen::Success) return Mat3d::Zero();
+  I = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
+  return I.allFinite() ? I : Mat3d::Zero();
+}
+
+/// Largest lambda of I v = lambda P^-1 v: the eigenvalues of L^T I L with P = L L^T (0 when P is not
+/// positive definite).
+double gainRatio(const Mat3d& I, const Mat3d& P) {
+  const Eigen::LLT<Mat3d> llt(P);
+  if (llt.info() != Eigen::Success) return 0.0;
+  const Mat3d L = llt.matrixL();
+  const Eigen::SelfAdjointEigenSolver<Mat3d> es(L.transpose() * I * L, Eigen::EigenvaluesOnly);
+  if (es.info() != Eigen::Success) return 0.0;
+  const double lambda = es.eigenvalues()(2);
+  return std::isfinite(lambda) ? lambda : 0.0;
+}
+
+}  // namespace
+
+FrameSelector::PoseInfo poseInformationGain(const NavState& x, const StateCov& P_before, const StateCov& P_after) {
+  constexpr int r = sidx::kRot, p = sidx::kPos;
+  FrameSelector::PoseInfo I = FrameSelector::PoseInfo::Zero();
+  I.topLeftCorner<3, 3>() = marginalGain(P_before.block<3, 3>(r, r), P_after.block<3, 3>(r, r));
+  const Mat3& R = x.R_world_imu;  // position information in body-frame errors: R^T I_w R
+  I.bottomRightCorner<3, 3>() =
+      R.transpose() * marginalGain(P_before.block<3, 3>(p, p), P_after.block<3, 3>(p, p)) * R;
+  return I;
+}
+
+double FrameSelector::informationRatio(const NavState& x, const StateCov& P) const {
+  if (!have_last_) return 0.0;
+  constexpr int r = sidx::kRot, p = sidx::kPos;
+  const Mat3& R = x.R_world_imu;
+  const double rot = gainRatio(last_info_.topLeftCorner<3, 3>(), P.block<3, 3>(r, r));
+  const double pos = gainRatio(R * last_info_.bottomRightCorner<3, 3>() * R.transpose(), P.block<3, 3>(p, p));
+  return std::max(rot, pos);
+}
+
+bool FrameSelector::select(const NavState& x, const StateCov& P, double sigma_min, bool degenerate) const {
   switch (mode_) {
     case VisualMode::Off: return false;
     case VisualMode::All: return true;
@@ -29,12 +85,14 @@ bool FrameSelector::select(const NavState& x, double sigma_min, bool degenerate)
   if (degenerate || !have_last_) return true;
   const double dt = (x.p_world_imu - last_.p_world_imu).norm();
   const double dr = rotationAngle(last_.R_world_imu.transpose() * x.R_world_imu);
-  return dt > translationThreshold(sigma_min) || dr > rotationThreshold(sigma_min);
+  if (dt > translationThreshold(sigma_min) || dr > rotationThreshold(sigma_min)) return true;
+  return cfg_.information_ratio > 0 && informationRatio(x, P) >= cfg_.information_ratio;
 }
 
-void FrameSelector::markUsed(const NavState& x) {
+void FrameSelector::markUsed(const NavState& x, const StateCov& P_before, const StateCov& P_after) {
   last_ = x;
   have_last_ = true;
+  last_info_ = poseInformationGain(x, P_before, P_after);
 }
 
 }  // namespace livo

@@ -1,5 +1,7 @@
 #include "livo/estimation/selector_config.hpp"
 
+#include <cmath>
+
 namespace livo {
 
 void SelectorConfig::load(const ConfigNode& root) {
@@ -15,6 +17,8 @@ void SelectorConfig::load(const ConfigNode& root) {
   n.check(degenerate_frames >= 1, "degenerate_frames", "must be >= 1");
   n.check(tau_translation_m > 0, "tau_translation_m", "must be > 0");
   n.check(tau_rotation_deg > 0, "tau_rotation_deg", "must be > 0");
+  n.get("information_ratio", information_ratio);
+  n.check(std::isfinite(information_ratio) && information_ratio >= 0, "information_ratio", "must be >= 0 (0: off)");
 }
 
 }  // namespace livo
