@@ -46,10 +46,14 @@ TEST(Stress, NoisyImuAndAggressiveMotion) {
   const RunSummary noisy = runStress("aggressive_noisy");
   ASSERT_GT(noisy.est.size(), 150u);
   EXPECT_LE(noisy.first_pose_s, 3.0) << "first pose within 3 s of the first data";
-  // Measured (2026-12-01): quiet 0.50 cm, noisy 1.07 cm (2.1x; the issue asks for 1.5x, not reached:
-  // seeds 6 and 7 give 1.6x and 1.8x). Bounds about twice the measured figures.
+  // Measured (2026-12-02, with the selector's information trigger): quiet 0.49 cm with 61 images, noisy
+  // 0.91 cm with 159 images (1.86x; the issue asks for 1.5x, not reached; seeds 6 and 7: 1.46x and 0.91x;
+  // before the trigger 1.09 cm with 61 images, 2.2x). Bounds about twice.
   EXPECT_LE(ateCm(quiet), 1.0);
-  EXPECT_LE(ateCm(noisy), 2.2);
+  EXPECT_LE(ateCm(noisy), 1.8);
+  // The noisier IMU leaves the filter less sure of the pose between images: the information trigger
+  // uses more of them.
+  EXPECT_GT(noisy.visual_frames, 2 * quiet.visual_frames);
 }
 
 // At cruise speed from the first sample: no rest to initialise from.
@@ -116,7 +120,7 @@ TEST(Stress, Combined) {
   ASSERT_GT(r.est.size(), 280u);
   EXPECT_LE(r.first_pose_s, 3.0);
   EXPECT_LE(r.max_pose_gap_s, 0.15);
-  EXPECT_LE(ateCm(r), 2.8);  // measured 1.36 cm (2026-12-01)
+  EXPECT_LE(ateCm(r), 1.4);  // measured 0.67 cm (2026-12-02; 1.36 cm before the information trigger)
 }
 
 // Black, saturated, frozen and missing images injected into the demo: each is detected and counted

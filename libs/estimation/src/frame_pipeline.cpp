@@ -49,7 +49,7 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   // 1. Initialisation, propagation, undistortion, downsampling (nothing to estimate before the IMU
   // is initialised or inside its window).
   if (lio_.predict(frame, r.lio)) {
-    // 2-3. The planes around the predicted scan, the iterated LiDAR update.
+    // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
     const PlaneFinder& planes = map.planesFor(frame, r);
     lidarStep(map, planes, r);
     // 4. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a
@@ -61,10 +61,6 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
     // photometric update and the visual map changes.
     if (gray != nullptr && selector_.select(r.lio.state, r.lio.P, r.lio.sigma_min, r.degenerate))
       visualStep(frame, *gray, map, r, r.lidar_failed);
-    // 6b. The registered scan into the map at the frame's final state: after the visual update, so
-    // that what the image corrected (drift along a weak LiDAR direction, most of all with a noisy IMU)
-    // is not written into the map for the next scans to register against.
-    if (insert_scan_) insertScan(map, r);
   }
   // 7. The frame's end at its final state: slides and the memory cap in process, the update message
   // to the map server. Visual point pointers of this frame are not used beyond this point.
@@ -115,7 +111,6 @@ const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, Frame
 }
 
 void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {
-  insert_scan_ = false;
   lio_.update(r.lio, planes, pool_.get());
   r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
   // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
@@ -126,11 +121,6 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
     if (map.holdsAround(r)) return;
     r.map_seeded = true;
   }
-  insert_scan_ = true;
-}
-
-void FramePipeline::insertScan(MapAccess& map, FrameResult& r) {
-  insert_scan_ = false;
   Stopwatch map_watch;
   map.insertScan(lio_.worldPoints(r.lio.points), r);
   lio_.markInserted(r.lio);

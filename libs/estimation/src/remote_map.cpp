@@ -100,13 +100,9 @@ VisualMapOps* RemoteMap::visualMap(const Frame& frame, FrameResult& r, const std
   if (frustum_keys != nullptr) {
     q.visual_keys = *frustum_keys;
   } else {
-    // The scan at the LiDAR posterior (it is inserted after the visual update, at the final state).
-    const NavState& x = r.lio.state;
-    for (const BodyPoint& bp : r.lio.points) {
-      const Vec3 p_world = x.R_world_imu * bp.p_imu + x.p_world_imu;
-      if (keyablePoint(p_world, visual_voxel_size_m_))
-        q.visual_keys.push_back(VoxelKey::fromPoint(p_world, visual_voxel_size_m_));
-    }
+    for (const PointWithCov& pw : registered_)
+      if (keyablePoint(pw.p_world, visual_voxel_size_m_))
+        q.visual_keys.push_back(VoxelKey::fromPoint(pw.p_world, visual_voxel_size_m_));
   }
   sortUnique(q.visual_keys);
   r.link.visual_keys = q.visual_keys.size();

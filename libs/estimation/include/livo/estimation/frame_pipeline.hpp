@@ -55,8 +55,6 @@ class FramePipeline {
   const Image* frameImage(const Frame& frame, Image& scratch, FrameResult& r);
   /// Step 3: LiDAR update against `planes`, then the registered points into the map.
   void lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r);
-  /// Step 6b: the scan lidarStep accepted, at the frame's final state (lio_'s state after the visual update).
-  void insertScan(MapAccess& map, FrameResult& r);
   /// Step 6 on `gray`, the frame's image at the processing scale (`lidar_failed`: retrieval from the
   /// camera frustum instead of the scan).
   void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r, bool lidar_failed);
@@ -71,7 +69,6 @@ class FramePipeline {
   ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;
   bool time_offset_prior_set_ = false;  ///< t_d's prior is in P (since the last initialisation)
-  bool insert_scan_ = false;            ///< lidarStep accepted the scan for the map (step 6b)
   std::size_t time_offset_resets_ = 0;
 };
 

@@ -4,12 +4,10 @@
 //   InProcessMap (in_process_map.hpp): the HybridMap in the same process (livo-run, the tests);
 //   RemoteMap (remote_map.hpp): the map server's HybridMap behind a MapClient (livo-estimator).
 //
-// Per estimated frame the pipeline calls, in this order: planesFor (step 2), visualMap (step 6,
-// only when the frame's image is selected), insertScan (step 6b, only with a registered scan: an
-// unregistered one never goes into the map; at the frame's final state, after the visual update),
-// then finishFrame (step 7) once per frame after the IMU is initialised (also for a frame inside the
-// initialisation window, which skips steps 2-6b). holdsAround may be called between planesFor and
-// visualMap.
+// Per estimated frame the pipeline calls, in this order: planesFor (step 2), insertScan (step 3b,
+// only with a registered scan: an unregistered one never goes into the map), visualMap (step 6,
+// only when the frame's image is selected), then finishFrame (step 7) once per frame after the IMU
+// is initialised (also for a frame inside the initialisation window, which skips steps 2-6).
 #pragma once
 
 #include "livo/common/types.hpp"
@@ -28,15 +26,14 @@ class MapAccess {
   /// Step 2: the planes the iterated LiDAR update matches against, around the predicted scan
   /// (r.lio.state is the prediction, r.lio.points the frame's points). Records its cost in r.link.
   virtual const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) = 0;
-  /// Step 6b: the frame's points in the world frame at its final state (after the visual update, when
-  /// one ran), with covariance.
+  /// Step 3b: the frame's points in the world frame at the LiDAR posterior, with covariance.
   virtual void insertScan(std::vector<PointWithCov> points, FrameResult& r) = 0;
   /// Whether the map holds anything where the predicted scan is (after a failed LiDAR update: with
   /// nothing there the scan is new territory or the map is empty, and seeds it instead of being
   /// dropped). True when unknown (no answer from the map server).
   virtual bool holdsAround(const FrameResult& r) = 0;
-  /// Step 6: the visual map for the frame's image, around the registered scan (r.lio.points) at the
-  /// LiDAR posterior (r.lio.state; the scan is not in the map yet), or in the visual voxels `frustum_keys` when the LiDAR update failed (no
+  /// Step 6: the visual map for the frame's image, around the registered scan at the LiDAR posterior
+  /// (r.lio.state), or in the visual voxels `frustum_keys` when the LiDAR update failed (no
   /// registered scan); null when it cannot be had (no answer from the map server): no visual update.
   /// Valid until finishFrame.
   virtual VisualMapOps* visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) = 0;
