@@ -26,30 +26,27 @@ double FrameSelector::rotationThreshold(double sigma_min) const {
 
 namespace {
 
-using Mat3d = Eigen::Matrix3d;
-static_assert(sidx::kRot == 0 && sidx::kPos == 3, "PoseInfo holds the rotation, then the position");
-
 /// P_after^-1 - P_before^-1 of one 3x3 marginal, symmetric positive semi-definite (zero when either
 /// is not positive definite).
-Mat3d marginalGain(const Mat3d& before, const Mat3d& after) {
-  const Eigen::LLT<Mat3d> b(before), a(after);
-  if (b.info() != Eigen::Success || a.info() != Eigen::Success) return Mat3d::Zero();
-  Mat3d I = a.solve(Mat3d::Identity()) - b.solve(Mat3d::Identity());
+Mat3 marginalGain(const Mat3& before, const Mat3& after) {
+  const Eigen::LLT<Mat3> b(before), a(after);
+  if (b.info() != Eigen::Success || a.info() != Eigen::Success) return Mat3::Zero();
+  Mat3 I = a.solve(Mat3::Identity()) - b.solve(Mat3::Identity());
   I = 0.5 * (I + I.transpose()).eval();
   // Rounding can leave small negative eigenvalues: an update never removes information.
-  const Eigen::SelfAdjointEigenSolver<Mat3d> es(I);
-  if (es.info() != Eigen::Success) return Mat3d::Zero();
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(I);
+  if (es.info() != Eigen::Success) return Mat3::Zero();
   I = es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).asDiagonal() * es.eigenvectors().transpose();
-  return I.allFinite() ? I : Mat3d::Zero();
+  return I.allFinite() ? I : Mat3::Zero();
 }
 
 /// Largest lambda of I v = lambda P^-1 v: the eigenvalues of L^T I L with P = L L^T (0 when P is not
 /// positive definite).
-double gainRatio(const Mat3d& I, const Mat3d& P) {
-  const Eigen::LLT<Mat3d> llt(P);
+double gainRatio(const Mat3& I, const Mat3& P) {
+  const Eigen::LLT<Mat3> llt(P);
   if (llt.info() != Eigen::Success) return 0.0;
-  const Mat3d L = llt.matrixL();
-  const Eigen::SelfAdjointEigenSolver<Mat3d> es(L.transpose() * I * L, Eigen::EigenvaluesOnly);
+  const Mat3 L = llt.matrixL();
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(L.transpose() * I * L, Eigen::EigenvaluesOnly);
   if (es.info() != Eigen::Success) return 0.0;
   const double lambda = es.eigenvalues()(2);
   return std::isfinite(lambda) ? lambda : 0.0;
@@ -59,11 +56,10 @@ double gainRatio(const Mat3d& I, const Mat3d& P) {
 
 FrameSelector::PoseInfo poseInformationGain(const NavState& x, const StateCov& P_before, const StateCov& P_after) {
   constexpr int r = sidx::kRot, p = sidx::kPos;
-  FrameSelector::PoseInfo I = FrameSelector::PoseInfo::Zero();
-  I.topLeftCorner<3, 3>() = marginalGain(P_before.block<3, 3>(r, r), P_after.block<3, 3>(r, r));
   const Mat3& R = x.R_world_imu;  // position information in body-frame errors: R^T I_w R
-  I.bottomRightCorner<3, 3>() =
-      R.transpose() * marginalGain(P_before.block<3, 3>(p, p), P_after.block<3, 3>(p, p)) * R;
+  FrameSelector::PoseInfo I;
+  I.rotation = marginalGain(P_before.block<3, 3>(r, r), P_after.block<3, 3>(r, r));
+  I.position_body = R.transpose() * marginalGain(P_before.block<3, 3>(p, p), P_after.block<3, 3>(p, p)) * R;
   return I;
 }
 
@@ -71,9 +67,8 @@ double FrameSelector::informationRatio(const NavState& x, const StateCov& P) con
   if (!have_last_) return 0.0;
   constexpr int r = sidx::kRot, p = sidx::kPos;
   const Mat3& R = x.R_world_imu;
-  const double rot = gainRatio(last_info_.topLeftCorner<3, 3>(), P.block<3, 3>(r, r));
-  const double pos = gainRatio(R * last_info_.bottomRightCorner<3, 3>() * R.transpose(), P.block<3, 3>(p, p));
-  return std::max(rot, pos);
+  return std::max(gainRatio(last_info_.rotation, P.block<3, 3>(r, r)),
+                  gainRatio(R * last_info_.position_body * R.transpose(), P.block<3, 3>(p, p)));
 }
 
 bool FrameSelector::select(const NavState& x, const StateCov& P, double sigma_min, bool degenerate) const {

@@ -18,8 +18,6 @@
 #include "livo/estimation/selector_config.hpp"
 #include "livo/estimation/state.hpp"
 
-#include <Eigen/Core>
-
 #include <string>
 
 namespace livo {
@@ -29,9 +27,11 @@ VisualMode parseVisualMode(const std::string& s);  ///< throws std::invalid_argu
 
 class FrameSelector {
  public:
-  /// Block-diagonal [dtheta, dp] information: the rotation's and the position's marginal information,
-  /// the position's in the body frame.
-  using PoseInfo = Eigen::Matrix<double, 6, 6>;
+  /// The marginal information of the rotation and of the position (in body-frame position errors).
+  struct PoseInfo {
+    Mat3 rotation = Mat3::Zero();
+    Mat3 position_body = Mat3::Zero();
+  };
 
   FrameSelector(SelectorConfig cfg, VisualMode mode) : cfg_(std::move(cfg)), mode_(mode) {}
 
@@ -62,7 +62,7 @@ class FrameSelector {
   bool have_last_ = false;
   int low_sigma_run_ = 0;  ///< consecutive frames with sigma_min below the threshold
   NavState last_;
-  PoseInfo last_info_ = PoseInfo::Zero();  ///< the last visual update's information
+  PoseInfo last_info_;  ///< the last visual update's information
 };
 
 /// The information a measurement update added to the rotation's and the position's marginals,
