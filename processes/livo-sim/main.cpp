@@ -1,4 +1,4 @@
-// livo-sim --scenario config/sim/NAME.yaml --out LOG.lcm --gt GT.tum [--rig RIG.yaml] [--seed N]
+// livo-sim (--scenario config/sim/NAME.yaml | --random SEED) --out LOG.lcm --gt GT.tum [--rig RIG.yaml] [--seed N]
 //          [--duration S] [--threads N] [--progress] [--quiet]
 // Runs a simulator scenario (libs/sim) and writes an LCM log (LIVO_IMU, LIVO_LIDAR, LIVO_CAMERA in time
 // order, log timestamps = sensor times), the ground-truth IMU trajectory (TUM) and a rig config.
@@ -8,6 +8,7 @@
 #include "livo/common/timing.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/log.hpp"
+#include "livo/sim/random_scenario.hpp"
 #include "livo/sim/simulator.hpp"
 
 #include <cinttypes>
@@ -28,7 +29,8 @@ const char* kDescription =
     "Scenario keys: config/sim/README.md. Same scenario and seed: same bytes.";
 
 struct Args {
-  std::string scenario, out, gt, rig;
+  std::string scenario, out, gt, rig, scenario_out;
+  std::int64_t random = -1;
   bool quiet = false, progress = false;
   std::int64_t seed = 0;
   double duration = 0.0;
@@ -36,7 +38,12 @@ struct Args {
 };
 
 void addOptions(livo::CommandLine& cl, Args& a) {
-  cl.text("--scenario", &a.scenario, "FILE", "scenario YAML (a scenario error exits with 2)").required();
+  cl.text("--scenario", &a.scenario, "FILE", "scenario YAML (a scenario error exits with 2); or --random");
+  cl.count("--random", &a.random, "SEED",
+           "draw a complete scenario (world, LiDAR, IMU, camera, motion, start) from the random-rig distribution "
+           "of config/sim/README.md instead of --scenario; 30 s unless --duration")
+      .defaultText("off");
+  cl.text("--scenario-out", &a.scenario_out, "FILE", "also write the scenario that ran as YAML (with --random: the drawn rig)");
   cl.text("--out", &a.out, "FILE", "LCM log to write").required();
   cl.text("--gt", &a.gt, "FILE", "ground-truth TUM file to write").required();
   cl.text("--rig", &a.rig, "FILE", "also write the rig config for livo-run (config/README.md schema)");
@@ -105,7 +112,27 @@ void printSummary(const livo::sim::Simulator& sim, double duration, double wall_
 
 /// The scenario with the command-line overrides; throws livo::ConfigError naming the key.
 livo::sim::SimScenario loadScenario(const Args& a, const livo::CommandLine& cl) {
-  livo::sim::SimScenario sc = livo::sim::loadScenarioFile(a.scenario);
+  if (cl.given("--random") == cl.given("--scenario"))
+    throw livo::ConfigError("give exactly one of --scenario FILE and --random SEED");
+  livo::sim::SimScenario sc;
+  if (cl.given("--random")) {
+    const auto drawn = livo::sim::drawRandomScenario(static_cast<std::uint64_t>(a.random),
+                                                     cl.given("--duration") ? a.duration : 30.0);
+    sc = livo::sim::parseScenario(drawn.yaml);
+    sc.source = "random rig " + std::to_string(a.random);
+    if (!a.quiet) std::cerr << "livo-sim: random rig " << a.random << ": " << drawn.summary << "\n";
+    if (!a.scenario_out.empty()) {
+      std::ofstream out(a.scenario_out);
+      if (!(out << drawn.yaml) || !out.flush()) throw livo::ConfigError(a.scenario_out + ": cannot write");
+    }
+  } else {
+    sc = livo::sim::loadScenarioFile(a.scenario);
+    if (!a.scenario_out.empty()) {
+      std::ifstream in(a.scenario);
+      std::ofstream out(a.scenario_out);
+      if (!(out << in.rdbuf()) || !out.flush()) throw livo::ConfigError(a.scenario_out + ": cannot write");
+    }
+  }
   if (cl.given("--seed")) sc.seed = a.seed;
   if (cl.given("--duration")) sc.duration_s = a.duration;
   sc.validate();
@@ -127,7 +154,7 @@ int run(const Args& a, const livo::sim::SimScenario& sc) {
   std::FILE* gt = std::fopen(a.gt.c_str(), "w");
   if (!gt) throw std::runtime_error(a.gt + ": cannot open for writing");
   std::fprintf(gt, "# ground truth of %s (seed %lld): IMU pose in the world, t x y z qx qy qz qw\n",
-               a.scenario.c_str(), static_cast<long long>(sc.seed));
+               sc.source.c_str(), static_cast<long long>(sc.seed));
   livo::LogWriter log(a.out);
 
   livo::sim::SimEvent ev;
