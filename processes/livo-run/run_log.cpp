@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <limits>
 #include <iostream>
 #include <map>
 
@@ -69,6 +70,8 @@ class FrameSink {
     if (stop_) return;
     if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
     outputs_.addFrame(record(frame, r));
+    health.addFrame(frame.utime, r.lio.initialized, r.lidarFailed(), r.visual_used, r.degenerate);
+    explain(frame, r);
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
       progress_.message("livo-run: " + pipeline_.odometry().initMessage());
       announced_init_ = true;
@@ -86,8 +89,42 @@ class FrameSink {
 
   MapCloud cloud;
   OccupancyMap occupancy;
+  RunHealth health;
+  std::string last_wait;  ///< what the initialisation waited for at the last frame without a pose
 
  private:
+  /// While no pose comes out, or the LiDAR update keeps failing, say why once per second of log.
+  void explain(const Frame& frame, const FrameResult& r) {
+    if (!r.lio.initialized) {
+      last_wait = pipeline_.odometry().waitMessage();
+      if (first_wait_ < 0) first_wait_ = frame.utime;
+      if (!args_.quiet && toSeconds(frame.utime - last_said_) >= 1.0) {
+        last_said_ = frame.utime;
+        char head[96];
+        std::snprintf(head, sizeof head, "livo-run: no pose yet, %.1f s after the first frame: ",
+                      toSeconds(frame.utime - first_wait_));
+        progress_.message(head + last_wait);
+      }
+      return;
+    }
+    if (!r.lidarFailed()) {
+      fail_since_ = -1;
+      return;
+    }
+    if (fail_since_ < 0) fail_since_ = frame.utime;
+    const double failing_s = toSeconds(frame.utime - fail_since_);
+    if (!args_.quiet && failing_s >= 1.0 && toSeconds(frame.utime - last_said_) >= 1.0) {
+      last_said_ = frame.utime;
+      char msg[256];
+      std::snprintf(msg, sizeof msg,
+                    "livo-run: LiDAR update failing for %.1f s: %d of %d points matched a plane (%d needed)%s",
+                    failing_s, r.lio.n_matched, r.lio.n_points, cfg_.pipe.lio.min_matches,
+                    r.visual_used ? "; the camera carries the frame" : "; on the IMU alone");
+      progress_.message(msg);
+    }
+  }
+  Utime first_wait_ = -1, last_said_ = std::numeric_limits<Utime>::min() / 2, fail_since_ = -1;
+
   void addToMaps(const Frame& frame, const FrameResult& r) {
     const Pose T_world_imu = r.lio.state.pose();
     const RegisteredScan scan =
@@ -260,12 +297,20 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
                                            {"threads", std::to_string(args.threads)},
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
-  outputs.writeStats(ms, rss, counters, notes);
+  if (!sink.health.anyPose())
+    sink.health.no_pose_reason = outputs.frames() == 0 ? "no complete frame in the log (LiDAR scans with IMU samples)"
+                                                        : "never initialised: " + sink.last_wait;
+  outputs.writeStats(ms, rss, counters, notes, &sink.health);
   std::cout << outputs.summary(rss);
   if (!args.quiet) std::cout << "preprocessing:\n" << pst.summary() << "\n";
   std::cout << "outputs in " << args.out << "\n";
   if (!log_error.empty()) {
     std::cerr << "livo-run: error: " << log_error << " (outputs up to this point were written)\n";
+    return kExitRunError;
+  }
+  if (!sink.health.anyPose()) {  // a run without a single pose is a failure, whatever the cause
+    std::cerr << "livo-run: warning: no pose in " << outputs.frames() << " frames: " << sink.health.no_pose_reason
+              << "\n";
     return kExitRunError;
   }
   return kExitOk;

@@ -14,7 +14,7 @@ void ImuConfig::load(const ConfigNode& n) {
   n.get("init_samples", init_samples).get("init_static_factor", init_static_factor);
   n.get("init_vibration_gyro_rad_s", init_vibration_gyro_rad_s).get("init_vibration_accel_mps2", init_vibration_accel_mps2);
   n.get("init_max_gyro_std", init_max_gyro_std).get("init_max_accel_std", init_max_accel_std);
-  n.get("init_static_wait_s", init_static_wait_s);
+  n.get("init_static_wait_s", init_static_wait_s).get("init_deadline_s", init_deadline_s);
   n.check(!n.has("init_max_samples"), "init_max_samples",
           "was removed (issue #13): without a static window the estimator initialises from motion after "
           "init_static_wait_s seconds; replace it with init_static_wait_s");
@@ -39,6 +39,7 @@ void ImuConfig::load(const ConfigNode& n) {
   n.check(init_max_gyro_std >= 0, "init_max_gyro_std", "must be >= 0 (0: derived from gyro_noise)");
   n.check(init_max_accel_std >= 0, "init_max_accel_std", "must be >= 0 (0: derived from accel_noise)");
   n.check(init_static_wait_s > 0 && init_static_wait_s <= 600, "init_static_wait_s", "must be in (0, 600] s");
+  n.check(init_deadline_s > 0 && init_deadline_s <= 600, "init_deadline_s", "must be in (0, 600] s");
   n.check(init_gyro_bias_sigma_rad_s > 0 && init_gyro_bias_sigma_rad_s < 1, "init_gyro_bias_sigma_rad_s", "must be in (0, 1) rad/s");
   n.check(init_accel_bias_sigma_mps2 > 0 && init_accel_bias_sigma_mps2 < 5, "init_accel_bias_sigma_mps2", "must be in (0, 5) m/s^2");
 }

@@ -20,6 +20,11 @@ double ImuConfig::staticAccelThreshold() const {
   return init_static_factor * std::sqrt(3.0) * accelSampleSigma() + init_vibration_accel_mps2;
 }
 
+double ImuConfig::deadlineSeconds() const {
+  const double window_s = double(init_samples - 1) / rate_hz;
+  return std::max(init_deadline_s, std::max(init_static_wait_s, window_s) + 0.05);
+}
+
 bool ImuInitializer::windowStats(WindowStats& w) const {
   const std::size_t n = static_cast<std::size_t>(cfg_.init_samples);
   if (samples_.size() < n) return false;
@@ -64,6 +69,7 @@ bool ImuInitializer::add(const ImuSample& s) {
 
   WindowStats w;
   const bool full = windowStats(w);
+  if (full) last_ = w;
   const bool is_static = full && w.score < 1.0;
   if (is_static && (!have_best_ || w.score < best_.score)) {
     best_ = w;
@@ -127,6 +133,62 @@ StateCov ImuInitializer::initialCovariance() const {
   P.block<3, 3>(kRot, kRot) = R.transpose() * Vec3(var_tilt, var_tilt, var_yaw).asDiagonal() * R;
   P.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.init_accel_bias_sigma_mps2 * cfg_.init_accel_bias_sigma_mps2;
   return P;
+}
+
+bool ImuInitializer::coarseState(NavState& x, double& tilt_sigma_rad, double& accel_scale) const {
+  if (samples_.empty()) return false;
+  // The mean specific force over the last second: gravity plus the mean acceleration (a velocity
+  // change over that second), whose size bounds the tilt error.
+  const Utime t_end = samples_.back().utime;
+  Vec3 mean = Vec3::Zero(), mean_g = Vec3::Zero();
+  int n = 0;
+  for (auto it = samples_.rbegin(); it != samples_.rend() && toSeconds(t_end - it->utime) <= 1.0; ++it, ++n) {
+    mean += it->accel;
+    mean_g += it->gyro;
+  }
+  mean /= double(n);
+  mean_g /= double(n);
+  const double norm = mean.norm();
+  if (!(norm > 1e-3) || !std::isfinite(norm)) return false;
+  accel_scale = norm < 4.0 ? cfg_.gravity_m_s2 / norm : 1.0;  // g units or m/s^2
+  double var = 0;
+  for (auto it = samples_.rbegin(); it != samples_.rend() && toSeconds(t_end - it->utime) <= 1.0; ++it)
+    var += ((it->accel - mean) * accel_scale).squaredNorm();
+  const double rms = std::sqrt(var / double(n));
+  x = NavState();
+  x.utime = t_end;
+  const Vec3 up_body = mean.normalized();
+  if (cfg_.gravity_align) {
+    x.R_world_imu = Quat::FromTwoVectors(up_body, Vec3::UnitZ()).toRotationMatrix();
+    x.g_world = Vec3(0, 0, -cfg_.gravity_m_s2);
+  } else {
+    x.g_world = -up_body * cfg_.gravity_m_s2;
+  }
+  // A calm window says more about the gyro bias than the prior: its mean rate, when plausible.
+  if (mean_g.norm() < 3.0 * cfg_.init_gyro_bias_sigma_rad_s) x.bg = mean_g;
+  // Tilt: the mean acceleration over the second is at most about the RMS deviation (a steady push is
+  // rare in a handheld or vehicle start); between 2 and 15 degrees.
+  tilt_sigma_rad = std::clamp(std::atan2(std::max(rms, std::abs(norm * accel_scale - cfg_.gravity_m_s2)), cfg_.gravity_m_s2),
+                              2.0 * M_PI / 180.0, 15.0 * M_PI / 180.0);
+  return true;
+}
+
+std::string ImuInitializer::status() const {
+  std::ostringstream os;
+  os.precision(3);
+  const double window_s = double(cfg_.init_samples) / cfg_.rate_hz;
+  if (done_) {
+    os << "static window found (" << best_.n << " samples), waiting for the LiDAR to confirm the rest";
+  } else if (last_.n == 0) {
+    os << "collecting the first static window of " << cfg_.init_samples << " samples (" << window_s << " s)";
+  } else {
+    os << "no static window of " << cfg_.init_samples << " samples yet: gyro RMS " << last_.rms_gyro << " rad/s of "
+       << cfg_.staticGyroThreshold() << " allowed, accel RMS " << last_.rms_accel << " m/s^2 of "
+       << cfg_.staticAccelThreshold() << " allowed";
+    if (last_.mean_gyro.norm() > 5.0 * cfg_.init_gyro_bias_sigma_rad_s)
+      os << ", mean rate " << last_.mean_gyro.norm() << " rad/s (turning)";
+  }
+  return os.str();
 }
 
 std::vector<ImuSample> ImuInitializer::samplesAfterWindow() const {

@@ -5,6 +5,8 @@
 #include "livo/map/point_cov.hpp"
 #include "livo/sensors/downsample.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 
@@ -42,7 +44,10 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
       case Rest::Confirmed:
       case Rest::Unconfirmable: initAtRest(frame); return InitStep::AtRest;
       case Rest::Moved: init_.reject(); break;  // constant velocity looked like rest to the IMU
-      case Rest::Unknown: return InitStep::Waiting;
+      case Rest::Unknown:
+        if (toSeconds(frame.utime - init_.firstSampleTime()) < cfg_.imu.deadlineSeconds()) return InitStep::Waiting;
+        initAtRest(frame);  // the deadline: the IMU's decision stands
+        return InitStep::AtRest;
     }
   }
   // From motion, once the static search has given up (a static window observes the gyro bias).
@@ -55,7 +60,52 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
     init_message_ = os.str();
     return InitStep::InMotion;
   }
+  if (init_.firstSampleTime() >= 0 && toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds() &&
+      initCoarse(frame))
+    return InitStep::Coarse;
   return InitStep::Waiting;
+}
+
+bool LioOdometry::initCoarse(const Frame& frame) {
+  NavState x;
+  double tilt_sigma = 0, accel_scale = 1;
+  if (!init_.coarseState(x, tilt_sigma, accel_scale)) return false;
+  const std::string waited = waitMessage();
+  // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
+  Vec3 v_body = Vec3::Zero();
+  const bool have_v = motion_ && motion_->velocityBody(v_body);
+  x.v_world = x.R_world_imu * v_body;
+  // State at the start of this frame's samples (predict() propagates through them).
+  if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
+  using namespace sidx;
+  P_ = initialCovariance();
+  const double var_tilt = tilt_sigma * tilt_sigma;
+  P_.block<3, 3>(kRot, kRot) = x.R_world_imu.transpose() * Vec3(var_tilt, var_tilt, 1e-8).asDiagonal() * x.R_world_imu;
+  P_.block<3, 3>(kPos, kPos) = Mat3::Identity() * 1e-6;
+  // Speed: the fixes' velocity is good to a few cm/s per axis at 10 Hz; without them the rig may
+  // move at walking speed (a vehicle rarely starts in motion without any LiDAR fix).
+  const double sv = have_v ? 0.3 : 1.0;
+  P_.block<3, 3>(kVel, kVel) = Mat3::Identity() * sv * sv;
+  P_.block<3, 3>(kBg, kBg) = Mat3::Identity() * cfg_.imu.init_gyro_bias_sigma_rad_s * cfg_.imu.init_gyro_bias_sigma_rad_s;
+  P_.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.imu.init_accel_bias_sigma_mps2 * cfg_.imu.init_accel_bias_sigma_mps2;
+  x_ = x;
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale);
+  motion_.reset();
+  std::ostringstream os;
+  os.precision(3);
+  os << "coarse start at the " << cfg_.imu.deadlineSeconds() << " s deadline (" << waited << "): gravity from the mean specific force (tilt sigma "
+     << tilt_sigma * 180.0 / M_PI << " deg), velocity " << (have_v ? "of the last LiDAR fixes" : "0") << " (sigma " << sv
+     << " m/s); the filter refines both";
+  init_message_ = os.str();
+  return true;
+}
+
+std::string LioOdometry::waitMessage() const {
+  if (initialized_) return "initialised";
+  if (init_.firstSampleTime() < 0) return "no IMU sample yet";
+  std::string m = init_.status();
+  if (motion_) m += "; " + motion_->status();
+  return m;
 }
 
 LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {

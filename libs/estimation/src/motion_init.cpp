@@ -232,7 +232,14 @@ bool MotionInitializer::solve(Solution& s) const {
 }
 
 bool MotionInitializer::accept(const Solution& s) const {
-  if (s.rms > 3.0 * fixSigma(lio_)) return false;  // the fixes do not fit one motion: registration failed
+  std::ostringstream why;
+  why.precision(3);
+  if (s.rms > 3.0 * fixSigma(lio_)) {  // the fixes do not fit one motion: registration failed
+    why << "the fixes do not fit one motion (residual RMS " << s.rms * 100 << " cm of " << 300 * fixSigma(lio_)
+        << " allowed)";
+    why_not_ = why.str();
+    return false;
+  }
   const double tau = toSeconds(fixes_.back().utime - fixes_.front().utime);
   Eigen::Matrix<double, 3, 6> J;
   J << Mat3::Identity(), Mat3::Identity() * tau;  // v(tau) = v0 + g tau + dv
@@ -243,7 +250,23 @@ bool MotionInitializer::accept(const Solution& s) const {
   const double sigma_v = std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(cov_v).eigenvalues().maxCoeff());
   const double sigma_tilt =
       std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_g).eigenvalues().maxCoeff())) / s.g.norm();
+  why << "velocity sigma " << sigma_v << " m/s of " << cfg_.max_speed_sigma_mps << ", tilt sigma "
+      << sigma_tilt * 180.0 / M_PI << " deg of " << cfg_.max_tilt_sigma_deg;
+  why_not_ = why.str();
   return sigma_v < cfg_.max_speed_sigma_mps && sigma_tilt < cfg_.max_tilt_sigma_deg * M_PI / 180.0;
+}
+
+std::string MotionInitializer::status() const {
+  std::ostringstream os;
+  os << "motion initialisation: " << (started_ ? fixes_.size() : 0) << " of " << cfg_.min_updates + 1 << " LiDAR fixes";
+  if (started_ && static_cast<int>(fixes_.size()) >= cfg_.min_updates + 1 && !why_not_.empty()) os << ", " << why_not_;
+  return os.str();
+}
+
+bool MotionInitializer::velocityBody(Vec3& v) const {
+  if (!started_ || fixes_.size() < 2) return false;
+  v = fixes_.back().R.transpose() * v_cv_;
+  return v.allFinite();
 }
 
 void MotionInitializer::takeOver(NavState& x, StateCov& P) {

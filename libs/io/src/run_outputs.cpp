@@ -2,6 +2,7 @@
 
 #include "livo/common/timing.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -98,8 +99,36 @@ struct FrameTimes {
 
 }  // namespace
 
+void RunHealth::addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate) {
+  if (first_ < 0) first_ = t;
+  const double dt = prev_ >= 0 && t > prev_ ? toSeconds(t - prev_) : 0.0;
+  prev_ = std::max(prev_, t);
+  if (!has_pose) {
+    if (first_pose_ < 0) initialising_s += dt;
+    return;
+  }
+  if (first_pose_ < 0) first_pose_ = t;
+  if (last_pose_ >= 0 && t > last_pose_) longest_gap_s = std::max(longest_gap_s, toSeconds(t - last_pose_));
+  last_pose_ = std::max(last_pose_, t);
+  if (lidar_failed) lidar_failed_s += dt;
+  if (lidar_failed && !visual_used) imu_only_s += dt;
+  if (degenerate) degenerate_s += dt;
+}
+
+double RunHealth::firstPoseDelaySeconds() const { return first_pose_ < 0 ? -1.0 : toSeconds(first_pose_ - first_); }
+
+std::string RunHealth::json() const {
+  std::ostringstream os;
+  os << "{\"first_pose_delay_s\": " << num(firstPoseDelaySeconds()) << ", \"initialising_s\": " << num(initialising_s)
+     << ", \"lidar_failed_s\": " << num(lidar_failed_s) << ", \"imu_only_s\": " << num(imu_only_s)
+     << ", \"degenerate_s\": " << num(degenerate_s) << ", \"longest_pose_gap_s\": " << num(longest_gap_s);
+  if (!no_pose_reason.empty()) os << ", \"no_pose_reason\": \"" << jsonEscape(no_pose_reason) << "\"";
+  os << "}";
+  return os.str();
+}
+
 void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std::map<std::string, double>& counters,
-                            const std::map<std::string, std::string>& notes) const {
+                            const std::map<std::string, std::string>& notes, const RunHealth* health) const {
   const FrameTimes ft(records_);
   const std::string tmp = dir_ + "/stats.json.tmp";
   {
@@ -135,6 +164,7 @@ void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std
       }
       os << "}";
     }
+    if (health) os << ",\n  \"health\": " << health->json();
     for (const auto& [k, v] : notes) os << ",\n  \"" << jsonEscape(k) << "\": \"" << jsonEscape(v) << "\"";
     os << "\n}\n";
     if (!os) throw std::runtime_error(tmp + ": write failed");

@@ -33,6 +33,11 @@ struct ImuConfig {
   /// Without a static window this long after the first sample (at least one window), the odometry
   /// initialises from motion (lio_odometry.hpp); the calmest static window seen is used otherwise.
   double init_static_wait_s = 1.0;
+  /// The latest time (after the first sample) at which the odometry starts: not initialised by then
+  /// (no static window the LiDAR confirmed, no motion solution), it starts from a coarse state (gravity
+  /// from the mean specific force of the last second, velocity from the LiDAR fixes or 0, both with wide
+  /// sigmas) and lets the filter converge. At least init_static_wait_s plus one static window.
+  double init_deadline_s = 1.5;
   double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of a gyro bias no static window observed
   double init_accel_bias_sigma_mps2 = 0.02;   ///< prior sigma of the accelerometer bias (never observed at start)
 
@@ -43,6 +48,8 @@ struct ImuConfig {
   double staticAccelThreshold() const;
   /// White-noise sigma of one sample (density * noise_scale * sqrt(rate)).
   double gyroSampleSigma() const;
+  /// The deadline in effect: init_deadline_s, but never before a static window can be chosen.
+  double deadlineSeconds() const;
   double accelSampleSigma() const;
 };
 

@@ -54,6 +54,14 @@ class ImuInitializer {
   /// Time of the first sample (-1 before any).
   Utime firstSampleTime() const { return first_utime_; }
   std::string describe() const;
+  /// While not done(): which condition is missing, with the numbers (the last full window's RMS
+  /// deviations against the thresholds).
+  std::string status() const;
+  /// A coarse state for a start without a static window or a motion solution (the deadline,
+  /// ImuConfig::deadlineSeconds()): gravity from the mean specific force of the last second of samples,
+  /// zero velocity, the gyro bias from the mean rate when it is a plausible bias; `tilt_sigma_rad` what
+  /// that mean can be off by. False without samples or gravity.
+  bool coarseState(NavState& x, double& tilt_sigma_rad, double& accel_scale) const;
 
  private:
   struct WindowStats {
@@ -71,6 +79,7 @@ class ImuInitializer {
   Utime first_utime_ = -1;
   bool have_best_ = false, done_ = false, no_static_ = false;
   WindowStats best_;
+  WindowStats last_;  ///< the last full window (status())
   double accel_scale_ = 1.0;
   NavState state_;
 };

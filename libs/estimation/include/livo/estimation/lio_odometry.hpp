@@ -84,10 +84,12 @@ class LioOdometry {
   bool initialized() const { return initialized_; }
   /// How the IMU was initialised (after initialized()), or what it waits for.
   const std::string& initMessage() const { return init_message_; }
+  /// Before initialized(): what the initialisation waits for, with the numbers.
+  std::string waitMessage() const;
 
  private:
   std::vector<BodyPoint> preparePoints(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const;
-  enum class InitStep { Waiting, AtRest, InMotion };
+  enum class InitStep { Waiting, AtRest, InMotion, Coarse };
   /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
   /// propagator when one of them is done.
   InitStep initialise(const Frame& frame);
@@ -95,6 +97,8 @@ class LioOdometry {
   /// Whether the LiDAR saw the rig at rest during the static window the IMU chose.
   Rest confirmRest(const Frame& frame);
   void initAtRest(const Frame& frame);
+  /// The deadline passed (ImuConfig::deadlineSeconds()): start from ImuInitializer::coarseState().
+  bool initCoarse(const Frame& frame);
 
   LioOdometryConfig cfg_;
   ImuInitializer init_;

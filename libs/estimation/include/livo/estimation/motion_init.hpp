@@ -66,6 +66,11 @@ class MotionInitializer {
   std::vector<BodyPoint>& points() { return points_; }
   int fixes() const { return static_cast<int>(fixes_.size()); }
   std::string describe() const;
+  /// While not converged: fixes registered of those needed, and why the solution is not taken.
+  std::string status() const;
+  /// The velocity of the last two fixes in the IMU frame of the last one (false with fewer than two
+  /// fixes): the coarse start's velocity (lio_odometry.hpp).
+  bool velocityBody(Vec3& v) const;
 
  private:
   struct Fix {
@@ -105,6 +110,7 @@ class MotionInitializer {
   Solution solution_;
   std::vector<BodyPoint> points_;
   Utime last_utime_ = 0;
+  mutable std::string why_not_;  ///< why the last solution was not taken (status())
 };
 
 }  // namespace livo

@@ -54,6 +54,25 @@ struct FrameRecord {
 };
 
 /// Map size at the end of a run.
+/// What a run did over time (stats.json section "health"), from its frames in order: the delay from
+/// the first frame to the first pose, the time spent initialising (frames without a pose before the
+/// first), with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used) and
+/// LiDAR-degenerate, and the longest gap between consecutive poses. A frame counts for the interval
+/// since the previous frame.
+struct RunHealth {
+  void addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate);
+  bool anyPose() const { return first_pose_ >= 0; }
+  /// Seconds from the first frame to the first pose (-1 without a pose).
+  double firstPoseDelaySeconds() const;
+  /// The JSON object written as "health" (without a trailing newline).
+  std::string json() const;
+  double initialising_s = 0, lidar_failed_s = 0, imu_only_s = 0, degenerate_s = 0, longest_gap_s = 0;
+  std::string no_pose_reason;  ///< set by the run when it ends without a pose
+
+ private:
+  Utime first_ = -1, prev_ = -1, first_pose_ = -1, last_pose_ = -1;
+};
+
 struct MapSummary {
   std::uint64_t local_voxels = 0;
   std::uint64_t visual_points_local = 0;
@@ -75,7 +94,7 @@ class RunOutputs {
   /// (e.g. preprocessing drops), `notes` extra strings.
   void writeStats(const MapSummary& map, double peak_rss_mb,
                   const std::map<std::string, double>& counters = {},
-                  const std::map<std::string, std::string>& notes = {}) const;
+                  const std::map<std::string, std::string>& notes = {}, const RunHealth* health = nullptr) const;
 
   std::size_t frames() const { return records_.size(); }
   std::size_t posesWritten() const { return tum_.count(); }
