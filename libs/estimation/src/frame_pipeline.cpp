@@ -115,10 +115,11 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
   r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
   // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
   // alone put it. Except where the map holds nothing around the scan (the first scan, new
-  // territory, an empty map server): there the scan seeds the map.
+  // territory, an empty map server) or the map is still young (lio.bootstrap_scans): there the scan
+  // seeds the map.
   if (r.lio.points.empty()) return;
   if (lio_.mapStarted() && !r.lio.lio_ok) {
-    if (map.holdsAround(r)) return;
+    if (!lio_.mapYoung() && map.holdsAround(r)) return;
     r.map_seeded = true;
   }
   Stopwatch map_watch;

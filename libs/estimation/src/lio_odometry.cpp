@@ -22,7 +22,8 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   lidar.check(lidar_model == "avia" || lidar_model == "mid360" || lidar_model == "spinning32" ||
                   lidar_model == "generic",
               "model", "must be avia, mid360, spinning32 or generic, got '" + lidar_model + "'");
-  root.section("lio").get("min_matches", min_matches);
+  root.section("lio").get("min_matches", min_matches).get("bootstrap_scans", bootstrap_scans);
+  root.section("lio").check(bootstrap_scans >= 1 && bootstrap_scans <= 1000, "bootstrap_scans", "must be in [1, 1000]");
 }
 
 LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {
@@ -196,6 +197,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
       r.P = P_;
       motion_.reset();
       map_started_ = false;  // the odometry's map starts with this frame's scan
+      scans_inserted_ = 0;
       return true;
     }
   }
@@ -244,7 +246,9 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
 void LioOdometry::markInserted(LioFrameResult& r) {
   if (r.points.empty()) return;
   r.map_started = !map_started_;
+  if (r.map_started) scans_inserted_ = 0;
   map_started_ = true;
+  ++scans_inserted_;
 }
 
 }  // namespace livo

@@ -30,8 +30,9 @@ std::string pose(const Pose& T) {
 
 void writeRigConfig(const SimScenario& sc, std::ostream& out) {
   const bool outdoor = sc.environmentOrDefault() == "outdoor";
-  const int init_samples =
-      std::clamp(static_cast<int>(0.5 * sc.trajectory.static_s * sc.imu.rate_hz), 30, 400);
+  // The static window follows the IMU alone (half a second of samples), never the scenario's rest: a
+  // rig config knows its sensors, not how long the next run stands still.
+  const int init_samples = std::clamp(static_cast<int>(std::lround(0.5 * sc.imu.rate_hz)), 20, 400);
   const std::string file = sc.source.substr(sc.source.find_last_of('/') + 1);
   out << "# Rig config written by livo-sim --rig for the scenario " << file << " (config/sim/).\n"
       << "# Schema: config/README.md. Calibration and noise are the simulated sensors' true values\n"
