@@ -114,12 +114,13 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
   lio_.update(r.lio, planes, pool_.get());
   r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
   // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
-  // alone put it. Except where the map holds nothing around the scan (the first scan, new
-  // territory, an empty map server) or the map is still young (lio.bootstrap_scans): there the scan
-  // seeds the map.
+  // alone put it. Except where the map cannot match the scan (the first scan, new territory, an
+  // empty map server, a young map whose voxels hold no planes yet: a sparse LiDAR needs several
+  // scans before they do): there the scan seeds the map at the predicted pose, its points' covariance
+  // carrying the pose's uncertainty, and the frame is no LiDAR failure.
   if (r.lio.points.empty()) return;
   if (lio_.mapStarted() && !r.lio.lio_ok) {
-    if (!lio_.mapYoung() && map.holdsAround(r)) return;
+    if (map.holdsAround(r, cfg_.lio.min_matches)) return;
     r.map_seeded = true;
   }
   Stopwatch map_watch;

@@ -22,8 +22,7 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   lidar.check(lidar_model == "avia" || lidar_model == "mid360" || lidar_model == "spinning32" ||
                   lidar_model == "generic",
               "model", "must be avia, mid360, spinning32 or generic, got '" + lidar_model + "'");
-  root.section("lio").get("min_matches", min_matches).get("bootstrap_scans", bootstrap_scans);
-  root.section("lio").check(bootstrap_scans >= 1 && bootstrap_scans <= 1000, "bootstrap_scans", "must be in [1, 1000]");
+  root.section("lio").get("min_matches", min_matches);
 }
 
 LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {
@@ -167,7 +166,14 @@ std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
 std::vector<PointWithCov> LioOdometry::worldPoints(const std::vector<BodyPoint>& pts) const {
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
-  const WorldPointCovariance point_cov(x_, P_);
+  // The first scan defines the map's frame: its geometry relative to that frame is as exact as the
+  // LiDAR; the pose's uncertainty (a coarse start's tilt, the origin) is the state's, not the map's.
+  StateCov P = P_;
+  if (!map_started_) {
+    P.block<3, 3>(sidx::kRot, sidx::kRot).setZero();
+    P.block<3, 3>(sidx::kPos, sidx::kPos).setZero();
+  }
+  const WorldPointCovariance point_cov(x_, P);
   for (const auto& bp : pts) {
     PointWithCov pw;
     const Vec3 q = x_.R_world_imu * bp.p_imu;
@@ -197,7 +203,6 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
       r.P = P_;
       motion_.reset();
       map_started_ = false;  // the odometry's map starts with this frame's scan
-      scans_inserted_ = 0;
       return true;
     }
   }
@@ -246,9 +251,7 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
 void LioOdometry::markInserted(LioFrameResult& r) {
   if (r.points.empty()) return;
   r.map_started = !map_started_;
-  if (r.map_started) scans_inserted_ = 0;
   map_started_ = true;
-  ++scans_inserted_;
 }
 
 }  // namespace livo

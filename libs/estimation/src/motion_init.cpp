@@ -264,9 +264,18 @@ std::string MotionInitializer::status() const {
 }
 
 bool MotionInitializer::velocityBody(Vec3& v) const {
-  if (!started_ || fixes_.size() < 2) return false;
-  v = fixes_.back().R.transpose() * v_cv_;
-  return v.allFinite();
+  // The velocities of the last two fix intervals must agree (within what 5 m/s^2 changes over them,
+  // plus 0.2 m/s of fix noise): fixes in degenerate geometry (a single wall, a corridor's axis) slide
+  // freely and give any velocity.
+  const std::size_t n = started_ ? fixes_.size() : 0;
+  if (n < 3) return false;
+  const Fix &a = fixes_[n - 3], &b = fixes_[n - 2], &c = fixes_[n - 1];
+  const double dt1 = toSeconds(b.utime - a.utime), dt2 = toSeconds(c.utime - b.utime);
+  if (!(dt1 > 1e-3 && dt2 > 1e-3)) return false;
+  const Vec3 v1 = (b.p - a.p) / dt1, v2 = (c.p - b.p) / dt2;
+  if (!v1.allFinite() || !v2.allFinite() || (v2 - v1).norm() > 0.2 + 5.0 * (dt1 + dt2) || v2.norm() > 50.0) return false;
+  v = c.R.transpose() * v2;
+  return true;
 }
 
 void MotionInitializer::takeOver(NavState& x, StateCov& P) {

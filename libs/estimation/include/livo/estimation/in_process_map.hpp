@@ -17,10 +17,17 @@ class InProcessMap final : public MapAccess {
 
   const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidar().voxels(); }
   void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.lidar().insert(points); }
-  bool holdsAround(const FrameResult& r) override {
+  bool holdsAround(const FrameResult& r, int min_points) override {
     const VoxelMap& m = map_.lidar().voxels();
-    for (const Vec3& p : scanInWorld(r.lio.state, r.lio.points))
-      if (keyablePoint(p, m.config().voxel_size_m) && m.hasVoxel(m.keyOf(p))) return true;
+    int on_planes = 0;
+    for (const Vec3& p : scanInWorld(r.lio.state, r.lio.points)) {
+      if (!keyablePoint(p, m.config().voxel_size_m)) continue;
+      const VoxelKey key = m.keyOf(p);
+      if (!m.hasVoxel(key)) continue;
+      bool plane = false;
+      m.visitPlanes(key, [&plane](const Plane&) { plane = true; });
+      if (plane && ++on_planes >= min_points) return true;
+    }
     return false;
   }
   VisualMapOps* visualMap(const Frame&, FrameResult&, const std::vector<VoxelKey>*) override { return &visual_; }

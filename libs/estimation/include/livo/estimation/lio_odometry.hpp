@@ -25,10 +25,6 @@ struct LioOdometryConfig {
   Pose T_imu_lidar = Pose::Identity();
   std::string lidar_model = "generic";  ///< lidar.model: avia | mid360 | spinning32 | generic
   int min_matches = 20;  ///< fewer matched points: the update is skipped and the frame flagged
-  /// lio.bootstrap_scans: the map is young until this many scans went in; a young map's failed
-  /// update is no LiDAR failure (a sparse LiDAR needs several scans before its voxels hold planes): the
-  /// scan goes in at the predicted pose, its points' covariance carrying the pose's uncertainty.
-  int bootstrap_scans = 10;
 
   /// Reads the rig sections imu, lidar (T_imu_lidar required) and the lio / voxel_map sections.
   void load(const ConfigNode& root);
@@ -77,8 +73,6 @@ class LioOdometry {
 
   /// True once a scan went into the map (update() runs from then on).
   bool mapStarted() const { return map_started_; }
-  /// The map still bootstraps (fewer than bootstrap_scans scans inserted since it started).
-  bool mapYoung() const { return scans_inserted_ < cfg_.bootstrap_scans; }
   /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
   void setState(const NavState& x, const StateCov& P) {
     x_ = x;
@@ -116,7 +110,6 @@ class LioOdometry {
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;
   bool map_started_ = false;
-  int scans_inserted_ = 0;
   Stopwatch watch_;  ///< predict() to update()
   std::string init_message_;
 };

@@ -28,10 +28,11 @@ class MapAccess {
   virtual const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) = 0;
   /// Step 3b: the frame's points in the world frame at the LiDAR posterior, with covariance.
   virtual void insertScan(std::vector<PointWithCov> points, FrameResult& r) = 0;
-  /// Whether the map holds anything where the predicted scan is (after a failed LiDAR update: with
-  /// nothing there the scan is new territory or the map is empty, and seeds it instead of being
-  /// dropped). True when unknown (no answer from the map server).
-  virtual bool holdsAround(const FrameResult& r) = 0;
+  /// Whether the map should have matched the scan: planes for at least `min_points` of the predicted
+  /// scan's points (after a failed LiDAR update: otherwise the scan is new territory, the map is
+  /// empty or still young, and it seeds the map instead of being dropped). The map server's answer
+  /// knows only its submap's plane count (any plane counts). True when unknown (no answer).
+  virtual bool holdsAround(const FrameResult& r, int min_points) = 0;
   /// Step 6: the visual map for the frame's image, around the registered scan at the LiDAR posterior
   /// (r.lio.state), or in the visual voxels `frustum_keys` when the LiDAR update failed (no
   /// registered scan); null when it cannot be had (no answer from the map server): no visual update.

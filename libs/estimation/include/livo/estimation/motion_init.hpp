@@ -68,8 +68,9 @@ class MotionInitializer {
   std::string describe() const;
   /// While not converged: fixes registered of those needed, and why the solution is not taken.
   std::string status() const;
-  /// The velocity of the last two fixes in the IMU frame of the last one (false with fewer than two
-  /// fixes): the coarse start's velocity (lio_odometry.hpp).
+  /// The velocity of the last two fixes in the IMU frame of the last one: the coarse start's velocity
+  /// (lio_odometry.hpp). False with fewer than three fixes, or when the last two intervals' velocities
+  /// disagree beyond what the motion and the fix noise allow (degenerate registrations slide).
   bool velocityBody(Vec3& v) const;
 
  private:

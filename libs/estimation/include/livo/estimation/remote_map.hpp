@@ -50,7 +50,7 @@ class RemoteMap final : public MapAccess {
 
   const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) override;
   void insertScan(std::vector<PointWithCov> points, FrameResult& r) override;
-  bool holdsAround(const FrameResult& r) override { return !r.link.map_timeout ? r.link.submap_planes > 0 : true; }
+  bool holdsAround(const FrameResult& r, int) override { return !r.link.map_timeout ? r.link.submap_planes > 0 : true; }
   VisualMapOps* visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) override;
   void finishFrame(const Frame& frame, FrameResult& r) override;
 
