@@ -137,7 +137,17 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   st.time_offset_sigma_s = f.time_offset_sigma_s;
   st.dropped_points = std::int32_t(std::min<std::size_t>(nonfinite, 0x7fffffff));
   lcm_.publish(channels_.estimator_stats, toMsg(st));
-  if (!f.lio.initialized) return;  // no pose yet
+  if (!f.lio.initialized) {  // no pose yet: say why, once per second of sensor time
+    if (log_ && (last_wait_said_ < 0 || toSeconds(frame.utime - last_wait_said_) >= 1.0)) {
+      last_wait_said_ = frame.utime;
+      *log_ << "livo-estimator: no pose yet: " << pipeline_.odometry().waitMessage() << "\n";
+    }
+    return;
+  }
+  if (!announced_init_ && log_) {
+    *log_ << "livo-estimator: " << pipeline_.odometry().initMessage() << "\n";
+    announced_init_ = true;
+  }
 
   OdometryOutput o;
   o.utime = frame.utime;

@@ -76,6 +76,8 @@ class EstimatorNode : public MapClient {
   bool answered_ = false;
   Submap answer_;
   int timeouts_in_row_ = 0;
+  Utime last_wait_said_ = -1;  ///< last "no pose yet" line (sensor time)
+  bool announced_init_ = false;
   Counters counters_;
 };
 
