@@ -179,3 +179,43 @@ TEST(LivoRun, PrintedConfigGivesTheSameTrajectory) {
   }
   fs::remove_all(dir);
 }
+
+// A run that produces no pose says why and fails: 1.2 s of a rig moving along a single wall (random rig
+// 1: no static window, LiDAR fixes that slide along the wall) ends before the 1.5 s initialisation
+// deadline. The same rig over 4 s starts at the deadline (coarse start) and stats.json's health says when.
+TEST(LivoRun, NoPoseExitsOneNamingTheCauseAndHealthSaysWhenPosesStarted) {
+  for (const char* b : {"livo-sim", "livo-run"})
+    if (!fs::exists(bin(b))) LIVO_SKIP() << bin(b) << " not built";
+  const fs::path dir = fs::temp_directory_path() / ("livo_test_cli_nopose_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string rig = (dir / "rig.yaml").string();
+  for (const char* seconds : {"1.2", "4"}) {
+    SCOPED_TRACE(seconds);
+    const std::string log = (dir / (std::string("w") + seconds + ".lcm")).string();
+    ASSERT_EQ(run(bin("livo-sim") + " --random 1 --duration " + seconds + " --out " + log + " --gt " +
+                  (dir / "gt.tum").string() + " --rig " + rig + " --quiet"),
+              0);
+    const fs::path out = dir / (std::string("out") + seconds);
+    const livo::test::Ran r = livo::test::runSplit(bin("livo-run") + " " + log + " --config " + rig + " --out " +
+                                                       out.string() + " --no-maps --progress",
+                                                   dir);
+    const std::string stats = slurp(out / "stats.json");
+    if (std::string(seconds) == "1.2") {
+      EXPECT_EQ(r.rc, 1) << r.err;
+      EXPECT_NE(r.err.find("livo-run: warning: no pose in"), std::string::npos) << r.err;
+      EXPECT_NE(r.err.find("no static window"), std::string::npos) << "names the missing condition: " << r.err;
+      EXPECT_NE(r.err.find("livo-run: no pose yet, 1.0 s after the first frame"), std::string::npos) << r.err;
+      EXPECT_NE(stats.find("\"no_pose_reason\": \"never initialised: "), std::string::npos) << stats;
+      EXPECT_DOUBLE_EQ(livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s"), -1.0);
+    } else {
+      EXPECT_EQ(r.rc, 0) << r.err;
+      EXPECT_NE(r.err.find("coarse start at the 1.5 s deadline"), std::string::npos) << r.err;
+      const double delay = livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s");
+      EXPECT_GE(delay, 1.3);  // the deadline counts from the first IMU sample, the delay from the first frame
+      EXPECT_LE(delay, 1.7);
+      EXPECT_LE(livo::test::jsonNumberAfter(stats, "\"health\"", "longest_pose_gap_s"), 0.11);
+      EXPECT_EQ(stats.find("no_pose_reason"), std::string::npos);
+    }
+  }
+  fs::remove_all(dir);
+}
