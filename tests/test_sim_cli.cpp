@@ -47,7 +47,7 @@ TEST(LivoSimBinary, HelpVersionAndUsageErrors) {
   fs::create_directories(dir);
   Ran r = runSim("--help", dir);
   EXPECT_EQ(r.rc, 0);
-  for (const char* s : {"usage: livo-sim --scenario FILE --out FILE --gt FILE [options]", "--threads N",
+  for (const char* s : {"usage: livo-sim --out FILE --gt FILE [options]", "--random SEED", "--threads N",
                         "[default: 2]", "--duration S", "[s; default: the scenario's duration_s]",
                         "exit status: 0 ok, 1 run-time error, 2 usage or configuration error"})
     EXPECT_NE(r.out.find(s), std::string::npos) << s << "\n" << r.out;
@@ -67,7 +67,9 @@ TEST(LivoSimBinary, HelpVersionAndUsageErrors) {
   }
   r = runSim("--out o.lcm --gt g.tum", dir);
   EXPECT_EQ(r.rc, 2);
-  EXPECT_EQ(r.err, "livo-sim: --scenario is required\ntry 'livo-sim --help'\n");
+  EXPECT_EQ(r.err, "livo-sim: give exactly one of --scenario FILE and --random SEED\ntry 'livo-sim --help'\n");
+  r = runSim("--scenario s.yaml --random 3 --out o.lcm --gt g.tum", dir);
+  EXPECT_EQ(r.rc, 2);
 
   // A scenario with a typo is a configuration error: exit 2, the key named, nothing written.
   std::ofstream(dir / "typo.yaml") << "duration_s: 1\nworld: {kind: room, sise_m: [8, 6, 3]}\n";

@@ -112,8 +112,6 @@ void printSummary(const livo::sim::Simulator& sim, double duration, double wall_
 
 /// The scenario with the command-line overrides; throws livo::ConfigError naming the key.
 livo::sim::SimScenario loadScenario(const Args& a, const livo::CommandLine& cl) {
-  if (cl.given("--random") == cl.given("--scenario"))
-    throw livo::ConfigError("give exactly one of --scenario FILE and --random SEED");
   livo::sim::SimScenario sc;
   if (cl.given("--random")) {
     const auto drawn = livo::sim::drawRandomScenario(static_cast<std::uint64_t>(a.random),
@@ -180,6 +178,10 @@ int main(int argc, char** argv) {
   livo::CommandLine cl("livo-sim", kDescription);
   addOptions(cl, args);
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
+  if (cl.given("--random") == cl.given("--scenario")) {
+    std::cerr << "livo-sim: give exactly one of --scenario FILE and --random SEED\ntry 'livo-sim --help'\n";
+    return livo::kExitUsage;
+  }
   livo::sim::SimScenario scenario;
   try {
     scenario = loadScenario(args, cl);
