@@ -26,6 +26,13 @@ std::string num(double v) {
   return s;
 }
 
+/// Shortest form for the summary line ("10", "0.26").
+std::string g(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
 std::string vec(std::initializer_list<double> v) {
   std::string s = "[";
   bool first = true;
@@ -100,7 +107,7 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   }
   y << "world:\n  kind: " << world << "\n  size_m: " << vec({size.x(), size.y(), size.z()})
     << "\n  texture: noise\n  texture_scale_m: " << num(tex_scale) << "\n  clutter: " << num(clutter) << "\n\n";
-  sum << world << " " << num(std::round(size.x() * 10) / 10) << "x" << num(std::round(size.y() * 10) / 10);
+  sum << world << " " << g(std::round(size.x() * 10) / 10) << "x" << g(std::round(size.y() * 10) / 10);
 
   // --- Motion and start.
   std::string motion;
@@ -160,8 +167,8 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
     << num(std::round(model_pps * density)) << "\n  range_noise_m: " << num(range_noise)
     << "\n  beam_noise_deg: " << num(beam_noise) << "\n  max_range_m: " << num(max_range) << "\n  blind_m: " << num(blind)
     << "\n\n";
-  sum << ", " << lidar << " " << num(std::round(model_pps * density / 1000.0)) << "k pts/s @" << num(lidar_rate)
-      << " Hz blind " << num(std::round(blind * 100) / 100) << " m";
+  sum << ", " << lidar << " " << g(std::round(model_pps * density / 1000.0)) << "k pts/s @" << g(lidar_rate)
+      << " Hz blind " << g(std::round(blind * 100) / 100) << " m";
 
   // --- IMU: noise from 0.5x to 30x the shipped densities (tactical to consumer grade).
   const double imu_rate = std::vector<double>{100.0, 200.0, 250.0, 400.0}[d.pick({0.2, 0.4, 0.15, 0.25})];
@@ -176,7 +183,7 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
     << "\n  accel_noise: " << num(2.0e-3 * grade) << "\n  gyro_bias_walk: " << num(1.9e-5 * std::sqrt(grade))
     << "\n  accel_bias_walk: " << num(3.0e-3 * std::sqrt(grade)) << "\n  gyro_bias_init: " << vec({bg.x(), bg.y(), bg.z()})
     << "\n  accel_bias_init: " << vec({ba.x(), ba.y(), ba.z()}) << "\n";
-  sum << ", IMU " << num(imu_rate) << " Hz x" << num(std::round(grade * 10) / 10) << " noise";
+  sum << ", IMU " << g(imu_rate) << " Hz x" << g(std::round(grade * 10) / 10) << " noise";
   if (d.chance(0.25)) {  // rotor / engine vibration
     const double va = d.uniform(0.05, 0.5), vg = d.uniform(0.005, 0.05), vf = d.uniform(40.0, 200.0);
     y << "  vibration:\n    accel_mps2: " << num(va) << "\n    gyro_rad_s: " << num(vg) << "\n    freq_hz: " << num(vf)
@@ -209,8 +216,8 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   if (fisheye) y << "\n  max_angle_deg: " << num(std::min(0.5 * fov_deg + 5.0, 100.0));
   y << "\n  rate_hz: " << num(cam_rate) << "\n  phase_s: " << num(d.uniform(0.0, 1.0 / cam_rate))
     << "\n  exposure_jitter: " << num(d.uniform(0.0, 0.3)) << "\n  pixel_noise: " << num(d.uniform(1.0, 4.0));
-  sum << ", " << (fisheye ? "fisheye " : "pinhole ") << width << "x" << height << " " << num(std::round(fov_deg))
-      << " deg @" << num(cam_rate) << " Hz";
+  sum << ", " << (fisheye ? "fisheye " : "pinhole ") << width << "x" << height << " " << g(std::round(fov_deg))
+      << " deg @" << g(cam_rate) << " Hz";
   if (d.chance(0.5)) y << "\n  exposure_time_s: " << num(d.uniform(0.001, std::min(0.02, 0.5 / cam_rate)));
   if (d.chance(0.5)) y << "\n  vignetting: " << num(d.uniform(0.0, 0.5));
   if (d.chance(0.3)) {
@@ -229,8 +236,8 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   const Eigen::Quaterniond q_c = smallTilt(d, 3.0) * q_c0;
   y << "extrinsics:\n  T_imu_lidar: " << poseText(t_l, q_l) << "\n  T_imu_camera: " << poseText(t_c, q_c) << "\n";
 
-  sum << ", " << motion << " " << num(std::round(speed * 10) / 10) << " m/s, ";
-  if (static_s > 0) sum << "rest " << num(std::round(static_s * 10) / 10) << " s";
+  sum << ", " << motion << " " << g(std::round(speed * 10) / 10) << " m/s, ";
+  if (static_s > 0) sum << "rest " << g(std::round(static_s * 10) / 10) << " s";
   else sum << "moving start";
   return {y.str(), sum.str()};
 }
