@@ -10,7 +10,9 @@
 // never used: when none is static by then, noStaticWindow() says so and the odometry initialises
 // from motion (lio_odometry.hpp); later static windows are still taken if they come first. An IMU
 // cannot tell rest from constant velocity: the odometry confirms a chosen window with the LiDAR
-// (motion_init.hpp) and reject()s it when the rig moved.
+// (motion_init.hpp) and reject()s it when the rig moved. By ImuConfig::deadlineSeconds() after the first
+// sample the odometry starts whatever it has (lio_odometry.cpp): a chosen window the LiDAR could not
+// confirm, else coarseState() (the window, its wait and the rate can never keep the first pose out).
 //
 // The state is at the end of the chosen window: gyro bias = mean gyro, gravity from the mean
 // specific force (its norm also gives the accelerometer scale: g-unit IMUs), zero velocity. The
