@@ -113,29 +113,32 @@ void ImuInitializer::reject() {
   while (samples_.size() > 1) samples_.pop_front();
 }
 
-StateCov ImuInitializer::initialCovariance() const {
+StateCov ImuInitializer::prior(const Mat3& R, double var_tilt, double var_bg) const {
   StateCov P = ::livo::initialCovariance();
   using namespace sidx;
+  P.block<3, 3>(kBg, kBg) = Mat3::Identity() * var_bg;
+  // The rotation error is in the body frame: R^T diag(tilt, tilt, yaw) R (a small yaw floor keeps P
+  // positive definite).
+  P.block<3, 3>(kRot, kRot) = R.transpose() * Vec3(var_tilt, var_tilt, 1e-8).asDiagonal() * R;
+  P.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.init_accel_bias_sigma_mps2 * cfg_.init_accel_bias_sigma_mps2;
+  return P;
+}
+
+StateCov ImuInitializer::initialCovariance() const {
   const double n = double(std::max(1, best_.n));
   const double window_s = double(best_.n) / cfg_.rate_hz;
   // Gyro bias: the mean of n samples, plus the walk over the window.
   const double var_bg = cfg_.gyroSampleSigma() * cfg_.gyroSampleSigma() / n +
                         cfg_.gyro_bias_walk * cfg_.gyro_bias_walk * window_s;
-  P.block<3, 3>(kBg, kBg) = Mat3::Identity() * var_bg;
   // Roll and pitch from the mean specific force, as well as the accelerometer bias allows (at rest a
-  // horizontal bias and a tilt look the same); yaw is the world's definition (a small floor keeps P
-  // positive definite). The rotation error is in the body frame: R^T diag(tilt, tilt, yaw) R.
+  // horizontal bias and a tilt look the same); yaw is the world's definition.
   const double sigma_mean = cfg_.accelSampleSigma() / std::sqrt(n);
   const double sigma_ba = cfg_.init_accel_bias_sigma_mps2;
   const double var_tilt = std::max((sigma_mean * sigma_mean + sigma_ba * sigma_ba) / (cfg_.gravity_m_s2 * cfg_.gravity_m_s2), 1e-8);
-  const double var_yaw = 1e-8;
-  const Mat3 R = state_.R_world_imu;
-  P.block<3, 3>(kRot, kRot) = R.transpose() * Vec3(var_tilt, var_tilt, var_yaw).asDiagonal() * R;
-  P.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.init_accel_bias_sigma_mps2 * cfg_.init_accel_bias_sigma_mps2;
-  return P;
+  return prior(state_.R_world_imu, var_tilt, var_bg);
 }
 
-bool ImuInitializer::coarseState(NavState& x, double& tilt_sigma_rad, double& accel_scale) const {
+bool ImuInitializer::coarseState(NavState& x, StateCov& P, double& tilt_sigma_rad, double& accel_scale) const {
   if (samples_.empty()) return false;
   // The mean specific force over the last second: gravity plus the mean acceleration (a velocity
   // change over that second), whose size bounds the tilt error.
@@ -170,6 +173,8 @@ bool ImuInitializer::coarseState(NavState& x, double& tilt_sigma_rad, double& ac
   // rare in a handheld or vehicle start); between 2 and 15 degrees.
   tilt_sigma_rad = std::clamp(std::atan2(std::max(rms, std::abs(norm * accel_scale - cfg_.gravity_m_s2)), cfg_.gravity_m_s2),
                               2.0 * M_PI / 180.0, 15.0 * M_PI / 180.0);
+  P = prior(x.R_world_imu, tilt_sigma_rad * tilt_sigma_rad,
+            cfg_.init_gyro_bias_sigma_rad_s * cfg_.init_gyro_bias_sigma_rad_s);
   return true;
 }
 

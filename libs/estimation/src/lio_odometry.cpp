@@ -39,13 +39,15 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
   }
   // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
   const bool motion_converged = motion_->process(frame);
+  const bool deadline = init_.firstSampleTime() >= 0 &&
+                        toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds();
   if (init_.done()) {
     switch (confirmRest(frame)) {
       case Rest::Confirmed:
       case Rest::Unconfirmable: initAtRest(frame); return InitStep::AtRest;
       case Rest::Moved: init_.reject(); break;  // constant velocity looked like rest to the IMU
       case Rest::Unknown:
-        if (toSeconds(frame.utime - init_.firstSampleTime()) < cfg_.imu.deadlineSeconds()) return InitStep::Waiting;
+        if (!deadline) return InitStep::Waiting;
         initAtRest(frame);  // the deadline: the IMU's decision stands
         return InitStep::AtRest;
     }
@@ -60,16 +62,14 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
     init_message_ = os.str();
     return InitStep::InMotion;
   }
-  if (init_.firstSampleTime() >= 0 && toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds() &&
-      initCoarse(frame))
-    return InitStep::Coarse;
+  if (deadline && initCoarse(frame)) return InitStep::Coarse;
   return InitStep::Waiting;
 }
 
 bool LioOdometry::initCoarse(const Frame& frame) {
   NavState x;
   double tilt_sigma = 0, accel_scale = 1;
-  if (!init_.coarseState(x, tilt_sigma, accel_scale)) return false;
+  if (!init_.coarseState(x, P_, tilt_sigma, accel_scale)) return false;
   const std::string waited = waitMessage();
   // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
   Vec3 v_body = Vec3::Zero();
@@ -77,19 +77,13 @@ bool LioOdometry::initCoarse(const Frame& frame) {
   x.v_world = x.R_world_imu * v_body;
   // State at the start of this frame's samples (predict() propagates through them).
   if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
-  using namespace sidx;
-  P_ = initialCovariance();
-  const double var_tilt = tilt_sigma * tilt_sigma;
-  P_.block<3, 3>(kRot, kRot) = x.R_world_imu.transpose() * Vec3(var_tilt, var_tilt, 1e-8).asDiagonal() * x.R_world_imu;
-  P_.block<3, 3>(kPos, kPos) = Mat3::Identity() * 1e-6;
+  P_.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-6;  // the origin
   // Speed: wide. Fixes that agree over two intervals may still slide together along a degenerate
   // direction (a wall, a corridor's axis), and without them the rig may move at a run's or a drone's
   // speed; a tight prior there holds a wrong velocity against the camera (random rigs 10 and 12 of the
   // matrix: 2 m/s instead of 0.3 took rig 10 from 53 m to 0.11 m ATE over 12 s).
   const double sv = std::max(2.0, 0.5 * v_body.norm());
-  P_.block<3, 3>(kVel, kVel) = Mat3::Identity() * sv * sv;
-  P_.block<3, 3>(kBg, kBg) = Mat3::Identity() * cfg_.imu.init_gyro_bias_sigma_rad_s * cfg_.imu.init_gyro_bias_sigma_rad_s;
-  P_.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.imu.init_accel_bias_sigma_mps2 * cfg_.imu.init_accel_bias_sigma_mps2;
+  P_.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
   x_ = x;
   propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale);
   motion_.reset();
@@ -170,12 +164,13 @@ std::vector<PointWithCov> LioOdometry::worldPoints(const std::vector<BodyPoint>&
   world.reserve(pts.size());
   // The first scan defines the map's frame: its geometry relative to that frame is as exact as the
   // LiDAR; the pose's uncertainty (a coarse start's tilt, the origin) is the state's, not the map's.
-  StateCov P = P_;
+  StateCov first_scan_P;
   if (!map_started_) {
-    P.block<3, 3>(sidx::kRot, sidx::kRot).setZero();
-    P.block<3, 3>(sidx::kPos, sidx::kPos).setZero();
+    first_scan_P = P_;
+    first_scan_P.block<3, 3>(sidx::kRot, sidx::kRot).setZero();
+    first_scan_P.block<3, 3>(sidx::kPos, sidx::kPos).setZero();
   }
-  const WorldPointCovariance point_cov(x_, P);
+  const WorldPointCovariance point_cov(x_, map_started_ ? P_ : first_scan_P);
   for (const auto& bp : pts) {
     PointWithCov pw;
     const Vec3 q = x_.R_world_imu * bp.p_imu;

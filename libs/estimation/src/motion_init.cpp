@@ -76,6 +76,7 @@ bool MotionInitializer::start(const Frame& frame) {
   samples_ = frame.imu;
   v_cv_ = Vec3::Zero();
   solved_ = rebuilt_ = false;
+  check_ = Check{};
   first_sweep_ = frame.sweep;
   first_frame_imu_.imu = frame.imu;
   first_frame_imu_.utime = frame.utime;
@@ -231,15 +232,9 @@ bool MotionInitializer::solve(Solution& s) const {
   return true;
 }
 
-bool MotionInitializer::accept(const Solution& s) const {
-  std::ostringstream why;
-  why.precision(3);
-  if (s.rms > 3.0 * fixSigma(lio_)) {  // the fixes do not fit one motion: registration failed
-    why << "the fixes do not fit one motion (residual RMS " << s.rms * 100 << " cm of " << 300 * fixSigma(lio_)
-        << " allowed)";
-    why_not_ = why.str();
-    return false;
-  }
+bool MotionInitializer::accept(const Solution& s) {
+  check_ = Check{true, s.rms, -1.0, -1.0};
+  if (s.rms > 3.0 * fixSigma(lio_)) return false;  // the fixes do not fit one motion: registration failed
   const double tau = toSeconds(fixes_.back().utime - fixes_.front().utime);
   Eigen::Matrix<double, 3, 6> J;
   J << Mat3::Identity(), Mat3::Identity() * tau;  // v(tau) = v0 + g tau + dv
@@ -250,16 +245,22 @@ bool MotionInitializer::accept(const Solution& s) const {
   const double sigma_v = std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(cov_v).eigenvalues().maxCoeff());
   const double sigma_tilt =
       std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Mat3>(cov_g).eigenvalues().maxCoeff())) / s.g.norm();
-  why << "velocity sigma " << sigma_v << " m/s of " << cfg_.max_speed_sigma_mps << ", tilt sigma "
-      << sigma_tilt * 180.0 / M_PI << " deg of " << cfg_.max_tilt_sigma_deg;
-  why_not_ = why.str();
+  check_.sigma_v = sigma_v;
+  check_.sigma_tilt_deg = sigma_tilt * 180.0 / M_PI;
   return sigma_v < cfg_.max_speed_sigma_mps && sigma_tilt < cfg_.max_tilt_sigma_deg * M_PI / 180.0;
 }
 
 std::string MotionInitializer::status() const {
   std::ostringstream os;
+  os.precision(3);
   os << "motion initialisation: " << (started_ ? fixes_.size() : 0) << " of " << cfg_.min_updates + 1 << " LiDAR fixes";
-  if (started_ && static_cast<int>(fixes_.size()) >= cfg_.min_updates + 1 && !why_not_.empty()) os << ", " << why_not_;
+  if (!started_ || static_cast<int>(fixes_.size()) < cfg_.min_updates + 1 || !check_.done) return os.str();
+  if (check_.sigma_v < 0)
+    os << ", the fixes do not fit one motion (residual RMS " << check_.rms * 100 << " cm of " << 300 * fixSigma(lio_)
+       << " allowed)";
+  else
+    os << ", velocity sigma " << check_.sigma_v << " m/s of " << cfg_.max_speed_sigma_mps << ", tilt sigma "
+       << check_.sigma_tilt_deg << " deg of " << cfg_.max_tilt_sigma_deg;
   return os.str();
 }
 

@@ -48,9 +48,9 @@ struct ImuConfig {
   double staticAccelThreshold() const;
   /// White-noise sigma of one sample (density * noise_scale * sqrt(rate)).
   double gyroSampleSigma() const;
+  double accelSampleSigma() const;
   /// The deadline in effect: init_deadline_s, but never before a static window can be chosen.
   double deadlineSeconds() const;
-  double accelSampleSigma() const;
 };
 
 /// State at one IMU sample, with the unbiased rate and world acceleration used for the interval that

@@ -61,9 +61,10 @@ class ImuInitializer {
   std::string status() const;
   /// A coarse state for a start without a static window or a motion solution (the deadline,
   /// ImuConfig::deadlineSeconds()): gravity from the mean specific force of the last second of samples,
-  /// zero velocity, the gyro bias from the mean rate when it is a plausible bias; `tilt_sigma_rad` what
-  /// that mean can be off by. False without samples or gravity.
-  bool coarseState(NavState& x, double& tilt_sigma_rad, double& accel_scale) const;
+  /// zero velocity, the gyro bias from the mean rate when it is a plausible bias; `P` the prior of
+  /// initialCovariance() with roll and pitch to `tilt_sigma_rad` (what that mean can be off by) and the
+  /// gyro bias to its prior sigma (the caller sets the velocity's). False without samples or gravity.
+  bool coarseState(NavState& x, StateCov& P, double& tilt_sigma_rad, double& accel_scale) const;
 
  private:
   struct WindowStats {
@@ -75,6 +76,9 @@ class ImuInitializer {
   };
   bool windowStats(WindowStats& w) const;  ///< the last init_samples samples; false without gravity
   void choose(const WindowStats& w);
+  /// The start's prior: roll and pitch to var_tilt about the world's horizontal axes (R the start's
+  /// attitude; yaw defines the world), gyro bias var_bg, accelerometer bias its prior.
+  StateCov prior(const Mat3& R, double var_tilt, double var_bg) const;
 
   ImuConfig cfg_;
   std::deque<ImuSample> samples_;  ///< since the first sample, bounded (see add())

@@ -22,10 +22,8 @@ class InProcessMap final : public MapAccess {
     int on_planes = 0;
     for (const Vec3& p : scanInWorld(r.lio.state, r.lio.points)) {
       if (!keyablePoint(p, m.config().voxel_size_m)) continue;
-      const VoxelKey key = m.keyOf(p);
-      if (!m.hasVoxel(key)) continue;
       bool plane = false;
-      m.visitPlanes(key, [&plane](const Plane&) { plane = true; });
+      m.visitPlanes(m.keyOf(p), [&plane](const Plane&) { plane = true; });
       if (plane && ++on_planes >= min_points) return true;
     }
     return false;

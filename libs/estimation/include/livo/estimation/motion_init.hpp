@@ -93,7 +93,7 @@ class MotionInitializer {
   /// Double integral alpha and single integral dv of the rotated specific force from the first fix.
   void integrate(Utime t, Mat3& R, Vec3& dv, Vec3& alpha) const;
   bool solve(Solution& s) const;
-  bool accept(const Solution& s) const;
+  bool accept(const Solution& s);  ///< records check_
 
   ImuConfig imu_;
   MotionInitConfig cfg_;
@@ -111,7 +111,11 @@ class MotionInitializer {
   Solution solution_;
   std::vector<BodyPoint> points_;
   Utime last_utime_ = 0;
-  mutable std::string why_not_;  ///< why the last solution was not taken (status())
+  /// The last acceptance test (status()): residual RMS, and the sigmas when the residual passed (else -1).
+  struct Check {
+    bool done = false;
+    double rms = 0, sigma_v = -1, sigma_tilt_deg = -1;
+  } check_;
 };
 
 }  // namespace livo

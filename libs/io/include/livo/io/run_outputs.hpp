@@ -53,7 +53,6 @@ struct FrameRecord {
   std::uint64_t map_bytes = 0;
 };
 
-/// Map size at the end of a run.
 /// What a run did over time (stats.json section "health"), from its frames in order: the delay from
 /// the first frame to the first pose, the time spent initialising (frames without a pose before the
 /// first), with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used) and
@@ -73,6 +72,7 @@ struct RunHealth {
   Utime first_ = -1, prev_ = -1, first_pose_ = -1, last_pose_ = -1;
 };
 
+/// Map size at the end of a run.
 struct MapSummary {
   std::uint64_t local_voxels = 0;
   std::uint64_t visual_points_local = 0;
