@@ -74,6 +74,10 @@ bool LioOdometry::initCoarse(const Frame& frame) {
   // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
   Vec3 v_body = Vec3::Zero();
   const bool have_v = motion_ && motion_->velocityBody(v_body);
+  // Gravity's direction in the map frame is estimated where the LiDAR constrains every direction of
+  // the motion (the accelerations that reveal it are observed); along a wall or a corridor it would
+  // wander with the unconstrained translation, and the tilt stays in the attitude.
+  free_gravity_ = motion_ && motion_->weakestShare() >= MotionInitializer::kConstrainedShare;
   x.v_world = x.R_world_imu * v_body;
   // State at the start of this frame's samples (predict() propagates through them).
   if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
@@ -248,7 +252,29 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
 void LioOdometry::markInserted(LioFrameResult& r) {
   if (r.points.empty()) return;
   r.map_started = !map_started_;
+  if (!map_started_ && free_gravity_) {
+    mapFrameFromFirstScan();
+    r.P = P_;
+  }
   map_started_ = true;
+}
+
+void LioOdometry::mapFrameFromFirstScan() {
+  // The first scan defines the map's frame at the estimated attitude: relative to the map, that
+  // attitude is exact, and the attitude's tilt uncertainty becomes gravity's (and the velocity's)
+  // direction in the map frame. With R_true = R Exp(dtheta), the map frame is the world rotated by
+  // Exp(R dtheta), so a vector u of the world reads u + [u]x R dtheta in the map frame. Without this
+  // a coarse start's tilt error (up to 15 deg) would stay in the map as a wrong gravity that only the
+  // accelerometer bias could absorb, and only until the rig turns (a car accelerating at 2 m/s^2 at
+  // the deadline, random rig 5's street: 14.7 m ATE over 12 s without, 4 cm with).
+  using namespace sidx;
+  StateCov T = StateCov::Identity();
+  T.block<3, 3>(kRot, kRot).setZero();
+  T.block<3, 3>(kGrav, kRot) = hat(x_.g_world) * x_.R_world_imu;
+  T.block<3, 3>(kVel, kRot) = hat(x_.v_world) * x_.R_world_imu;
+  T.block<3, 3>(kPos, kRot) = hat(x_.p_world_imu) * x_.R_world_imu;
+  P_ = T * P_ * T.transpose();
+  P_.block<3, 3>(kRot, kRot) += Mat3::Identity() * 1e-10;  // positive definite
 }
 
 }  // namespace livo

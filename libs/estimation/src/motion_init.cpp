@@ -13,20 +13,23 @@ void MotionInitConfig::load(const ConfigNode& n) {
   n.get("init_motion_rot_sigma_deg", rot_sigma_deg).get("init_motion_pos_sigma_m", pos_sigma_m);
   n.get("init_motion_min_updates", min_updates).get("init_motion_max_speed_sigma_mps", max_speed_sigma_mps);
   n.get("init_motion_max_tilt_sigma_deg", max_tilt_sigma_deg).get("init_motion_max_window_s", max_window_s);
+  n.get("init_motion_max_speed_mps", max_speed_mps);
   n.check(rot_sigma_deg > 0 && rot_sigma_deg < 90, "init_motion_rot_sigma_deg", "must be in (0, 90) deg");
   n.check(pos_sigma_m > 0 && pos_sigma_m < 100, "init_motion_pos_sigma_m", "must be in (0, 100) m");
   n.check(min_updates >= 3 && min_updates <= 1000, "init_motion_min_updates", "must be in [3, 1000]");
   n.check(max_speed_sigma_mps > 0, "init_motion_max_speed_sigma_mps", "must be > 0");
   n.check(max_tilt_sigma_deg > 0 && max_tilt_sigma_deg < 30, "init_motion_max_tilt_sigma_deg", "must be in (0, 30) deg");
   n.check(max_window_s >= 1 && max_window_s <= 120, "init_motion_max_window_s", "must be in [1, 120] s");
+  n.check(max_speed_mps >= 0 && max_speed_mps <= 100, "init_motion_max_speed_mps", "must be in [0, 100] m/s");
 }
 
 MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio,
                                      int min_matches, PreparePoints prepare)
     : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), prepare_(std::move(prepare)),
-      map_(std::make_unique<VoxelMap>(map)) {}
+      map_(std::make_unique<VoxelMap>(map)), occupancy_(0.15, 5) {}
 
 namespace {
+
 
 double fixSigma(const LioConfig& lio) { return std::max(2.0 * lio.range_noise_m, 0.01); }
 
@@ -72,6 +75,7 @@ bool MotionInitializer::start(const Frame& frame) {
   if (!(norm > 1e-3) || !std::isfinite(norm)) return false;  // no usable specific force yet
   accel_scale_ = norm < 4.0 ? imu_.gravity_m_s2 : 1.0;     // g units or m/s^2
   map_->clear();
+  occupancy_.clear();
   fixes_.clear();
   samples_ = frame.imu;
   v_cv_ = Vec3::Zero();
@@ -115,9 +119,36 @@ bool MotionInitializer::registerFrame(const Mat3& R_pred, const Vec3& p_pred, Ma
   P.block<3, 3>(kPos, kPos) = Mat3::Identity() * cfg_.pos_sigma_m * cfg_.pos_sigma_m;
   const LioUpdateResult u = lidarUpdate(x, P, points_, *map_, lio_);
   if (u.matched < min_matches_) return false;
+  // A fix far beyond its prior slid along a direction the scan does not constrain.
+  if ((x.p_world_imu - p_pred).norm() > 3.0 * cfg_.pos_sigma_m) return false;
   R = x.R_world_imu;
   p = x.p_world_imu;
   return true;
+}
+
+double MotionInitializer::weakestShare() const {
+  Mat3 H = Mat3::Zero();
+  map_->forEachPlane([&H](const VoxelKey&, const Plane& pl) {
+    if (pl.is_plane) H += double(pl.num_points) * pl.normal * pl.normal.transpose();
+  });
+  if (!(H.trace() > 0)) return 0.0;
+  const double weakest = Eigen::SelfAdjointEigenSolver<Mat3>(H / H.trace(), Eigen::EigenvaluesOnly).eigenvalues()(0);
+  return std::sqrt(std::max(0.0, weakest));
+}
+
+Vec3 MotionInitializer::searchPosition(const Mat3& R_pred, const Vec3& p_pred, double dt) const {
+  const double radius = cfg_.max_speed_mps * dt;
+  if (occupancy_.empty() || points_.empty() || !(radius > 0.05)) return p_pred;
+  // Only where the map's planes constrain every direction (the normals' scatter, weighted by points):
+  // along a wall or a corridor's axis the occupancy score is flat but for the scan pattern's sampling
+  // (a Mid-360's rings on the ground), and its best is noise.
+  if (weakestShare() < kConstrainedShare) return p_pred;
+  // At most 512 points, spread over the sweep: the cost is points x candidates.
+  std::vector<Vec3> q;
+  const double stride = std::max(1.0, double(points_.size()) / 512.0);
+  for (double f = 0; f < double(points_.size()); f += stride) q.push_back(R_pred * points_[std::size_t(f)].p_imu);
+  const OccupancyPyramid::Result r = occupancy_.search(q, p_pred, radius);
+  return r.t;
 }
 
 void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) {
@@ -131,12 +162,13 @@ void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R,
   for (const auto& bp : pts) {
     const Vec3 q = R * bp.p_imu;
     world.push_back({q + p, point_cov(bp, q)});
+    if (fixes_.size() < 3) occupancy_.insert(q + p);  // the map the first fixes search
   }
   map_->insert(world);
 }
 
-void MotionInitializer::rebuildMap() {
-  // The first scan again, undistorted with the velocity the first two fixes give.
+void MotionInitializer::rebuildMap(bool final) {
+  // The first scan again, undistorted along the current velocity estimate.
   const Fix& f0 = fixes_.front();
   const Utime t_first = first_frame_imu_.imu.front().utime;
   std::vector<ImuTracePoint> trace =
@@ -148,9 +180,21 @@ void MotionInitializer::rebuildMap() {
     tp.p_world_imu = R_end_T * (tp.p_world_imu - p_end);
   }
   map_->clear();
+  occupancy_.clear();
   insert(prepare_(first_sweep_, trace), Mat3::Identity(), Vec3::Zero());
-  first_sweep_ = LidarScan{};
-  rebuilt_ = true;
+  if (final) {
+    first_sweep_ = LidarScan{};
+    rebuilt_ = true;
+  }
+}
+
+const MotionInitializer::Fix* MotionInitializer::fixBefore(Utime t) const {
+  // Velocities over shorter intervals are mostly registration noise (frames cut at image times may
+  // be milliseconds apart).
+  constexpr double kMinInterval = 0.05;
+  for (auto it = fixes_.rbegin(); it != fixes_.rend(); ++it)
+    if (toSeconds(t - it->utime) >= kMinInterval) return &*it;
+  return nullptr;
 }
 
 bool MotionInitializer::process(const Frame& frame) {
@@ -160,14 +204,30 @@ bool MotionInitializer::process(const Frame& frame) {
   last_utime_ = frame.utime;
   Mat3 R_pred, R;
   Vec3 p_pred, p;
-  const std::vector<ImuTracePoint> trace = predictTrace(frame, R_pred, p_pred);
-  samples_.insert(samples_.end(), frame.imu.begin(), frame.imu.end());
+  std::vector<ImuTracePoint> trace = predictTrace(frame, R_pred, p_pred);
   points_ = prepare_(frame.sweep, trace);
-  if (points_.empty() || !registerFrame(R_pred, p_pred, R, p)) return solved_;
   const Fix& last = fixes_.back();
-  v_cv_ = (p - last.p) / std::max(1e-3, toSeconds(frame.utime - last.utime));
+  const double dt = std::max(1e-3, toSeconds(frame.utime - last.utime));
+  if (fixes_.size() < 3 && !points_.empty()) {
+    // The speed is not known yet: search, undistort along the velocity the search implies (before the
+    // first fix, the map's first scan too, which was undistorted at rest), and search again until the
+    // velocity settles: each round shrinks the smear's error by about scan length / (2 interval).
+    for (int round = 0; round < 4; ++round) {
+      const Vec3 v = (searchPosition(R_pred, p_pred, dt) - last.p) / dt;
+      const bool settled = (v - v_cv_).norm() * dt < 0.05;
+      v_cv_ = v;
+      trace = predictTrace(frame, R_pred, p_pred);
+      points_ = prepare_(frame.sweep, trace);
+      if (settled || fixes_.size() > 1) break;
+      rebuildMap(false);
+    }
+  }
+  samples_.insert(samples_.end(), frame.imu.begin(), frame.imu.end());
+  if (fixes_.size() >= 3) occupancy_.clear();
+  if (points_.empty() || !registerFrame(R_pred, p_pred, R, p)) return solved_;
+  if (const Fix* base = fixBefore(frame.utime)) v_cv_ = (p - base->p) / toSeconds(frame.utime - base->utime);
   fixes_.push_back({frame.utime, R, p});
-  if (!rebuilt_ && fixes_.size() == 2) rebuildMap();
+  if (!rebuilt_ && fixes_.size() == 2) rebuildMap(true);
   else insert(points_, R, p);
   Solution s;
   solved_ = solve(s) && accept(s);
@@ -265,15 +325,17 @@ std::string MotionInitializer::status() const {
 }
 
 bool MotionInitializer::velocityBody(Vec3& v) const {
-  // The velocities of the last two fix intervals must agree (within what 5 m/s^2 changes over them,
-  // plus 0.2 m/s of fix noise): fixes in degenerate geometry (a single wall, a corridor's axis) slide
-  // freely and give any velocity.
-  const std::size_t n = started_ ? fixes_.size() : 0;
-  if (n < 3) return false;
-  const Fix &a = fixes_[n - 3], &b = fixes_[n - 2], &c = fixes_[n - 1];
-  const double dt1 = toSeconds(b.utime - a.utime), dt2 = toSeconds(c.utime - b.utime);
-  if (!(dt1 > 1e-3 && dt2 > 1e-3)) return false;
-  const Vec3 v1 = (b.p - a.p) / dt1, v2 = (c.p - b.p) / dt2;
+  // The velocities of the last two fix intervals (each at least 50 ms) must agree (within what
+  // 5 m/s^2 changes over them, plus 0.2 m/s of fix noise): fixes in degenerate geometry (a single
+  // wall, a corridor's axis) slide freely and give any velocity, and consistently so: the map's
+  // planes must constrain every direction (weakestShare).
+  if (!started_ || fixes_.empty() || weakestShare() < kConstrainedShare) return false;
+  const Fix& c = fixes_.back();
+  const Fix* b = fixBefore(c.utime);
+  const Fix* a = b ? fixBefore(b->utime) : nullptr;
+  if (!a) return false;
+  const double dt1 = toSeconds(b->utime - a->utime), dt2 = toSeconds(c.utime - b->utime);
+  const Vec3 v1 = (b->p - a->p) / dt1, v2 = (c.p - b->p) / dt2;
   if (!v1.allFinite() || !v2.allFinite() || (v2 - v1).norm() > 0.2 + 5.0 * (dt1 + dt2) || v2.norm() > 50.0) return false;
   v = c.R.transpose() * v2;
   return true;

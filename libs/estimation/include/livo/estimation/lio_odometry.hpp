@@ -69,6 +69,9 @@ class LioOdometry {
   /// World points with covariance at the current posterior (what step 3 inserts into the map).
   std::vector<PointWithCov> worldPoints(const std::vector<BodyPoint>& pts) const;
   /// Records that the frame's points went into the map (enables update() from the next frame on).
+  /// After a coarse start in geometry that constrains every direction, the first scan defines the map
+  /// frame: the attitude's tilt uncertainty moves to gravity's direction in that frame
+  /// (mapFrameFromFirstScan; r.P is updated).
   void markInserted(LioFrameResult& r);
 
   /// True once a scan went into the map (update() runs from then on).
@@ -109,7 +112,9 @@ class LioOdometry {
   NavState x_;
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;
+  void mapFrameFromFirstScan();
   bool map_started_ = false;
+  bool free_gravity_ = false;  ///< a coarse start where the LiDAR constrains every direction
   Stopwatch watch_;  ///< predict() to update()
   std::string init_message_;
 };

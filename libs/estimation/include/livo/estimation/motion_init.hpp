@@ -7,7 +7,12 @@
 //     undistorted along that motion and registered point-to-plane (the odometry's own iterated
 //     update, with priors of init_motion_rot_sigma_deg on the rotation and init_motion_pos_sigma_m
 //     on the position and nothing else free). The map is rebuilt once the second fix gives a
-//     velocity, so that the first scan is undistorted too.
+//     velocity, so that the first scan is undistorted too. The first two registrations do not trust
+//     the prediction (nothing yet says how fast the rig moves; at 12 m/s and 5 Hz a frame is 2.4 m
+//     and point-to-plane converges only within about a voxel): a correlative search over an occupancy
+//     pyramid of the map (occupancy_search.hpp) finds the translation within init_motion_max_speed_mps
+//     times the frame interval, the sweep is undistorted again with the velocity it implies, and the
+//     registration starts from there.
 //  2. Gravity and velocity by least squares over the IMU between the fixes: in the first IMU frame,
 //     p_k = v_0 t_k + g t_k^2 / 2 + alpha_k, alpha_k the double integral of the gyro-rotated specific
 //     force from the first fix (t_k measured from it); rows weighted by the fix sigma
@@ -26,6 +31,7 @@
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/estimation/state.hpp"
+#include "livo/map/occupancy_search.hpp"
 #include "livo/map/voxel_map.hpp"
 
 #include <functional>
@@ -42,11 +48,17 @@ struct MotionInitConfig {
   double max_speed_sigma_mps = 0.05;  ///< imu.init_motion_max_speed_sigma_mps
   double max_tilt_sigma_deg = 0.5;    ///< imu.init_motion_max_tilt_sigma_deg
   double max_window_s = 10.0;         ///< imu.init_motion_max_window_s: fixes and samples kept (oldest dropped)
+  double max_speed_mps = 15.0;        ///< imu.init_motion_max_speed_mps: the first fixes' search radius per second
   void load(const ConfigNode& imu);   ///< keys of the `imu` section
 };
 
 class MotionInitializer {
  public:
+  /// The first fixes' search, their velocity (velocityBody) and a coarse start's free gravity
+  /// direction (lio_odometry.hpp) need every direction constrained: weakestShare() at least this
+  /// (a single wall's along-wall direction has about 0.02; random rig 5's street with clutter 0.13).
+  static constexpr double kConstrainedShare = 0.1;
+
   /// `prepare` undistorts and downsamples a sweep along an IMU trace (the odometry's own step 1c).
   using PreparePoints = std::function<std::vector<BodyPoint>(const LidarScan&, const std::vector<ImuTracePoint>&)>;
   MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio, int min_matches,
@@ -66,11 +78,15 @@ class MotionInitializer {
   std::vector<BodyPoint>& points() { return points_; }
   int fixes() const { return static_cast<int>(fixes_.size()); }
   std::string describe() const;
+  /// The weakest direction's share of the map planes' normal scatter (sqrt of the smallest
+  /// eigenvalue over the trace, weighted by points): about 0 along a wall or a corridor's axis.
+  double weakestShare() const;
   /// While not converged: fixes registered of those needed, and why the solution is not taken.
   std::string status() const;
   /// The velocity of the last two fixes in the IMU frame of the last one: the coarse start's velocity
   /// (lio_odometry.hpp). False with fewer than three fixes, or when the last two intervals' velocities
-  /// disagree beyond what the motion and the fix noise allow (degenerate registrations slide).
+  /// disagree beyond what the motion and the fix noise allow, or when the map's planes leave a
+  /// direction unconstrained (degenerate registrations slide).
   bool velocityBody(Vec3& v) const;
 
  private:
@@ -88,8 +104,15 @@ class MotionInitializer {
   /// Gyro rotation, constant-velocity position trace over the frame's samples from the last fix.
   std::vector<ImuTracePoint> predictTrace(const Frame& frame, Mat3& R_pred, Vec3& p_pred) const;
   bool registerFrame(const Mat3& R_pred, const Vec3& p_pred, Mat3& R, Vec3& p) const;
+  /// The first fixes: the correlative search's position for this frame (rotation R_pred), searched
+  /// within max_speed_mps x the interval since the last fix around p_pred.
+  Vec3 searchPosition(const Mat3& R_pred, const Vec3& p_pred, double dt) const;
+
   void insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p);
-  void rebuildMap();
+  /// The map from the first scan undistorted along v_cv_; `final`: the first scan is then dropped.
+  void rebuildMap(bool final);
+  /// The latest fix at least 50 ms before t (nullptr if none).
+  const Fix* fixBefore(Utime t) const;
   /// Double integral alpha and single integral dv of the rotated specific force from the first fix.
   void integrate(Utime t, Mat3& R, Vec3& dv, Vec3& alpha) const;
   bool solve(Solution& s) const;
@@ -101,6 +124,7 @@ class MotionInitializer {
   int min_matches_;
   PreparePoints prepare_;
   std::unique_ptr<VoxelMap> map_;
+  OccupancyPyramid occupancy_;     ///< of map_'s points while the first fixes are searched
   double accel_scale_ = 1.0;
   bool started_ = false, solved_ = false, rebuilt_ = false;
   Vec3 v_cv_ = Vec3::Zero();       ///< constant velocity of the last two fixes (world = first IMU frame)
