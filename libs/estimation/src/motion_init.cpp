@@ -30,7 +30,6 @@ MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg,
 
 namespace {
 
-
 double fixSigma(const LioConfig& lio) { return std::max(2.0 * lio.range_noise_m, 0.01); }
 
 /// Trace over [t_from, t_to] with gyro rotation from R_from and constant velocity v from p_from.
@@ -147,8 +146,10 @@ Vec3 MotionInitializer::searchPosition(const Mat3& R_pred, const Vec3& p_pred, d
   std::vector<Vec3> q;
   const double stride = std::max(1.0, double(points_.size()) / 512.0);
   for (double f = 0; f < double(points_.size()); f += stride) q.push_back(R_pred * points_[std::size_t(f)].p_imu);
-  const OccupancyPyramid::Result r = occupancy_.search(q, p_pred, radius);
-  return r.t;
+  // Within two of its finest cells the search's answer is no better than the prediction (and its
+  // quantisation, over a frame interval, a velocity error): there the registration alone converges.
+  const Vec3 t = occupancy_.search(q, p_pred, radius).t;
+  return (t - p_pred).norm() > 2.0 * occupancy_.cellSize(0) ? t : p_pred;
 }
 
 void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) {
@@ -214,6 +215,7 @@ bool MotionInitializer::process(const Frame& frame) {
     // velocity settles: each round shrinks the smear's error by about scan length / (2 interval).
     for (int round = 0; round < 4; ++round) {
       const Vec3 v = (searchPosition(R_pred, p_pred, dt) - last.p) / dt;
+      if (v == v_cv_) break;  // the search kept the prediction
       const bool settled = (v - v_cv_).norm() * dt < 0.05;
       v_cv_ = v;
       trace = predictTrace(frame, R_pred, p_pred);

@@ -74,7 +74,6 @@ OccupancyPyramid::Result OccupancyPyramid::search(const std::vector<Vec3>& pts, 
     half = 2;
   }
   r.t = best;
-  r.center_hits = score(pts, center, 0);
   return r;
 }
 

@@ -34,7 +34,6 @@ class OccupancyPyramid {
   struct Result {
     Vec3 t = Vec3::Zero();  ///< the best translation
     int hits = 0;           ///< query points in occupied finest cells at t
-    int center_hits = 0;    ///< the same at the centre (the prediction): a flat score moved nothing
     int points = 0;         ///< query points scored
   };
   /// The translation within the cube |t - center|_inf <= radius_m that puts the most `pts` in occupied
