@@ -96,12 +96,17 @@ void SensorInput::finish() {
   if (role_ != livo::RosRole::Imu || gate_.decided()) return;
   ready_.clear();
   gate_.finish(ready_);
+  std::uint64_t published = 0;
   for (std::size_t i = 0; i < ready_.size(); ++i) {
     if (i > 0) std::this_thread::sleep_for(std::chrono::microseconds(250));  // as in onMessage()
     livo::RosPayload p(ready_[i]);
-    publish(p);
+    if (publish(p)) ++published;  // a failed publish is counted as rejected, with its error
   }
   std::lock_guard<std::mutex> lock(mu_);
+  // The samples held for the unit decision go out at the stop and are counted as out (and held), so the
+  // summary's "in" = "out" + "rejected" + "skipped" + "dropped" holds after a stop too.
+  stats_.published += published;
+  stats_.held += published;
   unit_note_ = gate_.note();
 }
 
