@@ -1,5 +1,5 @@
 // The adaptive visual frame selector (livo/estimation/frame_selector.hpp): the motion thresholds of
-// ALGORITHMS.md, and the information trigger against brute force (a full-state Kalman update and a
+// docs/algorithms.md, and the information trigger against brute force (a full-state Kalman update and a
 // search over axes for the generalised eigenvalue).
 #include "livo/common/config.hpp"
 #include "livo/common/so3.hpp"

@@ -20,7 +20,7 @@ using namespace livo::test;
 // ---------------------------------------------------------------- nearest-plane search
 namespace {
 
-// Oracle: the acceptance criteria of ALGORITHMS.md section 2 evaluated over EVERY plane of the map,
+// Oracle: the acceptance criteria of docs/algorithms.md section 2 evaluated over EVERY plane of the map,
 // restricted by key comparison to the point's root voxel, then to the one neighbour voxel chosen from
 // the metric position inside the voxel (outer quarters).
 class BruteForceSearch {

@@ -283,7 +283,7 @@ struct Expected {
   Vec2 px;
 };
 
-// Brute force over every point of the map (ALGORITHMS.md 4.2 as specified in VisualMap::pointsInView).
+// Brute force over every point of the map (docs/algorithms.md 4.2 as specified in VisualMap::pointsInView).
 std::map<int, Expected> bruteForceInView(const VisualMap& map, const CameraModel& cam, const Pose& T_wc,
                                          const std::vector<Vec3>& scan) {
   const VisualMapConfig& cfg = map.config();

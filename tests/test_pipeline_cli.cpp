@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -52,7 +53,8 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
     const std::string stats = slurp(out / "stats.json");
     for (const char* key : {"\"frames\"", "\"visual_frames\"", "\"degenerate_frames\"", "\"timing_ms\"", "\"lio\"",
                             "\"vio\"", "\"map\"", "\"total\"", "\"median\"", "\"p95\"", "\"peak_rss_mb\"",
-                            "\"local_voxels\"", "\"visual_points_local\"", "\"visual_points_longterm\"", "\"bytes\""})
+                            "\"local_voxels\"", "\"visual_points_local\"", "\"visual_points_longterm\"", "\"bytes\"",
+                            "\"map_wait\""})
       EXPECT_NE(stats.find(key), std::string::npos) << key;
     EXPECT_EQ(stats.find("\"visual_frames\": 0,") != std::string::npos, mode == "off") << stats.substr(0, 200);
     EXPECT_EQ(stats.find("\"time_offset_estimate_s\""), std::string::npos) << "not estimated by default";
@@ -60,7 +62,20 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
     const std::string pcd = slurp(out / "map.pcd");
     EXPECT_NE(pcd.find("FIELDS x y z rgb"), std::string::npos);
     EXPECT_EQ(slurp(out / "map.bt").rfind("# Octomap OcTree binary file", 0), 0u);
-    EXPECT_EQ(run(bin("livo-eval") + " --gt " + gt + " --est " + (out / "trajectory.tum").string()), 0);
+    // The trajectory against the simulator's ground truth. Measured 2026-12-05 (8 s of the demo): off
+    // 0.77 cm, adaptive 0.25 cm, all 0.15 cm; bounds about twice.
+    const livo::test::Ran ev = livo::test::runSplit(bin("livo-eval") + " --json --gt " + gt + " --est " +
+                                                        (out / "trajectory.tum").string(), out);
+    ASSERT_EQ(ev.rc, 0) << ev.err;
+    const std::size_t at = ev.out.find("\"ate_rmse_m\":");
+    ASSERT_NE(at, std::string::npos) << ev.out;
+    const double ate = std::stod(ev.out.substr(at + 13));
+    const double bound = mode == "off" ? 0.015 : mode == "adaptive" ? 0.005 : 0.003;
+    std::printf("[ demo 8 s ] %s: ATE %.3f cm (bound %.1f cm)\n", mode.c_str(), 100 * ate, 100 * bound);
+    EXPECT_LE(ate, bound);
+    // One process: nothing waits for a map server.
+    EXPECT_NE(stats.find("\"map_wait\": {\"mean\": 0, \"median\": 0, \"p95\": 0, \"max\": 0"), std::string::npos)
+        << stats;
   }
   // camera.estimate_time_offset: the estimate and its sigma in frames.csv and stats.json.
   {
@@ -77,17 +92,28 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
                               sd = livo::test::csvColumn(out / "frames.csv", "time_offset_sigma_s");
     ASSERT_FALSE(td.empty());
     ASSERT_TRUE(std::isfinite(td.back()) && std::isfinite(sd.back()));
-    EXPECT_LE(std::abs(td.back()), 3 * 0.005);      // within the reset bound of the default prior
+    // The demo's camera has no stamp delay: the truth is 0. Measured 2026-12-05: 2.11 ms with a sigma of
+    // 0.048 ms after 8 s (the photometric residuals are treated as independent per pixel, so the sigma is
+    // far too small to bound the error); bound about twice the error.
+    std::printf("[ demo 8 s ] camera time offset %.2f ms, sigma %.3f ms (truth 0)\n", 1e3 * td.back(), 1e3 * sd.back());
+    EXPECT_LE(std::abs(td.back()), 0.0045);
     EXPECT_GT(sd.back(), 0.0);
-    EXPECT_LT(sd.back(), 0.005);                     // the images have narrowed the prior
+    EXPECT_LT(sd.back(), 0.001);                     // the images have narrowed the 5 ms prior
     const std::string stats = slurp(out / "stats.json");
     EXPECT_NE(stats.find("\"time_offset_estimate_s\""), std::string::npos) << stats;
     EXPECT_NE(stats.find("\"time_offset_sigma_s\""), std::string::npos) << stats;
   }
   // A bad config key and a missing log fail with a non-zero exit, never a crash.
   std::ofstream(dir / "bad.yaml") << slurp(rig) << "lio:\n  max_iteratons: 3\n";
-  EXPECT_NE(run(bin("livo-run") + " " + log + " --config " + (dir / "bad.yaml").string() + " --out " + (dir / "x").string()), 0);
-  EXPECT_NE(run(bin("livo-run") + " " + (dir / "missing.lcm").string() + " --config " + rig + " --out " + (dir / "y").string()), 0);
+  // Exit status 2: a configuration error, nothing run; 1: a run-time error (the log cannot be read).
+  const livo::test::Ran bad =
+      livo::test::runSplit(bin("livo-run") + " " + log + " --config " + (dir / "bad.yaml").string() + " --out " + (dir / "x").string(), dir);
+  EXPECT_EQ(bad.rc, 2) << bad.err;
+  EXPECT_NE(bad.err.find("max_iteratons"), std::string::npos) << bad.err;
+  const livo::test::Ran missing = livo::test::runSplit(
+      bin("livo-run") + " " + (dir / "missing.lcm").string() + " --config " + rig + " --out " + (dir / "y").string(), dir);
+  EXPECT_EQ(missing.rc, 1) << missing.err;
+  EXPECT_NE(missing.err.find("missing.lcm"), std::string::npos) << missing.err;
   fs::remove_all(dir);
 }
 

@@ -92,8 +92,15 @@ TEST(EstimatorOverMemq, RoundTripGivesTheSingleProcessTrajectory) {
   EXPECT_EQ(est.counters().late_submaps, 0u);
   EXPECT_EQ(out.stats.size(), sf.frames.size());
   std::size_t visual = 0;
-  for (const auto& s : out.stats) visual += s.visual_used;
+  double wait_ms = 0, map_ms = 0;
+  for (const auto& s : out.stats) {
+    visual += s.visual_used;
+    wait_ms += s.map_wait_ms;  // the queries' answers are handled inside the wait: > 0 in all
+    map_ms += s.map_ms;        // sending the update (the map server inserts)
+  }
   EXPECT_GT(visual, 5u);
+  EXPECT_GT(wait_ms, 0.0);
+  EXPECT_GT(map_ms, 0.0);
   EXPECT_EQ(service.counters().updates, out.odom.size()) << "one update per estimated frame";
   server.publishStats();
   lcm.drain();

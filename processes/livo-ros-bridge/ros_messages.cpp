@@ -163,6 +163,7 @@ diagnostic_msgs::DiagnosticStatus estimatorStatus(const livo::OdometryOutput* od
     d.values.push_back(kv("lio_ms", st->lio_ms));
     d.values.push_back(kv("vio_ms", st->vio_ms));
     d.values.push_back(kv("map_ms", st->map_ms));
+    d.values.push_back(kv("map_wait_ms", st->map_wait_ms));
     d.values.push_back(kv("total_ms", st->total_ms));
     d.values.push_back(kv("sigma_min", st->sigma_min));
     d.values.push_back(kv("degenerate", st->degenerate ? 1 : 0));

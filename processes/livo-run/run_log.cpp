@@ -4,6 +4,7 @@
 #include "livo/cli/progress.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/io/convert.hpp"
+#include "livo/io/frame_row.hpp"
 #include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
@@ -138,20 +139,7 @@ class FrameSink {
     rec.utime = frame.utime;
     rec.has_pose = r.lio.initialized;
     rec.T_world_imu = r.lio.state.pose();
-    rec.lio_ms = r.lio.lio_ms;
-    rec.vio_ms = r.vio_ms;
-    rec.map_ms = r.lio.map_ms + r.map.ms;  // insertion + slides / evictions
-    rec.total_ms = r.total_ms;
-    rec.sigma_min = r.lio.sigma_min;
-    rec.degenerate = r.degenerate;
-    rec.visual_used = r.visual_used;
-    rec.n_points = r.lio.n_points;
-    rec.n_planes_matched = r.lio.n_matched;
-    rec.n_visual_points = r.n_visual_points;
-    rec.n_longterm_visual_points = r.n_longterm_visual_points;
-    rec.has_time_offset = r.has_time_offset;
-    rec.time_offset_s = r.time_offset_s;
-    rec.time_offset_sigma_s = r.time_offset_sigma_s;
+    applyStats(rec, frameStats(r, frame.utime, 0, 0));  // the row the four processes write (frame_row.hpp)
     rec.map_bytes = map_bytes_(r);
     return rec;
   }

@@ -159,7 +159,8 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
     const StateVec delta = Delta - K_bar * g;
     x = x.boxplus(delta);
 
-    // 4. Convergence: two converged iterations (or the last allowed one) end the loop.
+    // 4. Convergence: two converged iterations, or one at the second-to-last allowed iteration, end the
+    //    loop; otherwise it runs to max_iterations.
     const bool small = delta.segment<3>(sidx::kRot).norm() < conv_rot &&
                        delta.segment<3>(sidx::kPos).norm() < cfg.converge_pos_m;
     if (small) ++converged_count;

@@ -67,6 +67,7 @@ Validation checkStats(const livo::estimator_stats_t& m) {
   LIVO_MSG_CHECK(nonNegative(m.lio_ms, "lio_ms"));
   LIVO_MSG_CHECK(nonNegative(m.vio_ms, "vio_ms"));
   LIVO_MSG_CHECK(nonNegative(m.map_ms, "map_ms"));
+  LIVO_MSG_CHECK(nonNegative(m.map_wait_ms, "map_wait_ms"));
   LIVO_MSG_CHECK(nonNegative(m.total_ms, "total_ms"));
   LIVO_MSG_CHECK(nonNegative(m.sigma_min, "sigma_min"));
   const std::pair<std::int32_t, const char*> counts[] = {{m.n_points, "n_points"},
@@ -178,6 +179,7 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.lio_ms = s.lio_ms;
   m.vio_ms = s.vio_ms;
   m.map_ms = s.map_ms;
+  m.map_wait_ms = s.map_wait_ms;
   m.total_ms = s.total_ms;
   m.sigma_min = s.sigma_min;
   m.degenerate = s.degenerate;
@@ -205,6 +207,7 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.lio_ms = m.lio_ms;
   out.vio_ms = m.vio_ms;
   out.map_ms = m.map_ms;
+  out.map_wait_ms = m.map_wait_ms;
   out.total_ms = m.total_ms;
   out.sigma_min = m.sigma_min;
   out.degenerate = m.degenerate != 0;

@@ -80,7 +80,7 @@ namespace {
 /// initialisation: ~0 ms each, they would pull every statistic down), and the visual update's time on
 /// the frames that ran it (its cost per image).
 struct FrameTimes {
-  std::vector<double> lio, vio, map, total, vio_per_visual_frame;
+  std::vector<double> lio, vio, map, map_wait, total, vio_per_visual_frame;
   std::size_t frames = 0, visual = 0, degenerate = 0;
   explicit FrameTimes(const std::vector<FrameRecord>& records) {
     for (const auto& r : records) {
@@ -91,6 +91,7 @@ struct FrameTimes {
       lio.push_back(r.lio_ms);
       vio.push_back(r.vio_ms);
       map.push_back(r.map_ms);
+      map_wait.push_back(r.map_wait_ms);
       total.push_back(r.total_ms);
       if (r.visual_used) vio_per_visual_frame.push_back(r.vio_ms);
     }
@@ -141,6 +142,7 @@ void RunOutputs::writeStats(const MapSummary& map, double peak_rss_mb, const std
     writeSummary(os, "vio", summarize(ft.vio), false);
     writeSummary(os, "vio_per_visual_frame", summarize(ft.vio_per_visual_frame), false, true);
     writeSummary(os, "map", summarize(ft.map), false);
+    writeSummary(os, "map_wait", summarize(ft.map_wait), false);
     writeSummary(os, "total", summarize(ft.total), true);
     os << "  },\n  \"peak_rss_mb\": " << num(peak_rss_mb) << ",\n  \"map\": {\"local_voxels\": " << map.local_voxels
        << ", \"visual_points_local\": " << map.visual_points_local

@@ -1,4 +1,4 @@
-// One node of a root voxel's plane octree (ALGORITHMS.md section 3, "Octree", "Node
+// One node of a root voxel's plane octree (docs/algorithms.md section 3, "Octree", "Node
 // initialisation", "Updates"). Private to libs/map.
 //
 // States:
@@ -30,7 +30,7 @@ class OctreeNode {
  public:
   OctreeNode(const Vec3& center, int layer) : center_(center), layer_(static_cast<std::uint8_t>(layer)) {}
 
-  /// Adds one point that lies in this node's cube (ALGORITHMS.md section 3, "Updates").
+  /// Adds one point that lies in this node's cube (docs/algorithms.md section 3, "Updates").
   void insert(const MapPoint& pt, const VoxelMapConfig& cfg);
 
   /// Calls f(const Plane&) for every plane leaf below (and including) this node.

@@ -36,7 +36,7 @@ bool scorePlaneCandidate(const Plane& plane, const PointWithCov& pw, double sigm
 
 bool neighbourVoxelKey(const Vec3& p, double voxel_size, VoxelKey& out) {
   // Position inside the voxel in units of the voxel edge, in [0, 1): metric, not index, coordinates
-  // (FAST-LIVO2 mixes the two, ALGORITHMS.md section 2 [quirk]).
+  // (FAST-LIVO2 mixes the two, docs/algorithms.md section 2 [quirk]).
   const Vec3 scaled = p / voxel_size;
   const Vec3 fl(std::floor(scaled.x()), std::floor(scaled.y()), std::floor(scaled.z()));
   const Vec3 frac = scaled - fl;

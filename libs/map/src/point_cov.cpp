@@ -10,7 +10,7 @@ Mat3 pointCovarianceBody(const Vec3& p_body, double range_sigma_m, double bearin
   if (!(r > 1e-9)) return var_r * Mat3::Identity();
   const Vec3 d = p_body / r;
   const Mat3 ddT = d * d.transpose();
-  // sin^2(sigma_theta) with sigma_theta converted from degrees (ALGORITHMS.md section 2).
+  // sin^2(sigma_theta) with sigma_theta converted from degrees (docs/algorithms.md section 2).
   const double s = std::sin(bearing_sigma_deg * M_PI / 180.0);
   const double var_tangent = r * r * s * s;  // r^2 sin^2(sigma_theta): A diag(.) A^T = this * (I - ddT)
   return var_r * ddT + var_tangent * (Mat3::Identity() - ddT);

@@ -1,4 +1,4 @@
-// VisualMap: storage, retrieval (ALGORITHMS.md 4.2), creation (5.1) and housekeeping. The observation
+// VisualMap: storage, retrieval (docs/algorithms.md 4.2), creation (5.1) and housekeeping. The observation
 // rules, reference selection and outlier handling are in visual_map_observations.cpp.
 #include "livo/map/visual_map.hpp"
 
@@ -199,7 +199,7 @@ int VisualMap::addPoints(const Image& gray, const CameraModel& cam, const Pose& 
   const Pose T_camera_world = T_world_camera.inverse();
   const Vec3 camera_center = T_world_camera.translation();
 
-  // Best Shi-Tomasi candidate per free cell (ALGORITHMS.md 5.1).
+  // Best Shi-Tomasi candidate per free cell (docs/algorithms.md 5.1).
   struct Pick {
     double score = -1.0;
     int index = -1;

@@ -1,4 +1,4 @@
-// VisualMap: observation rules (ALGORITHMS.md 5.2), reference selection and normal refinement (5.3),
+// VisualMap: observation rules (docs/algorithms.md 5.2), reference selection and normal refinement (5.3),
 // outlier bookkeeping (5.5).
 #include "livo/map/visual_map.hpp"
 

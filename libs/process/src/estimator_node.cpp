@@ -2,6 +2,7 @@
 
 #include "livo/common/timing.hpp"
 #include "livo/io/estimator_messages.hpp"
+#include "livo/io/frame_row.hpp"
 #include "livo/io/map_messages.hpp"
 #include "livo/process/scan_colour.hpp"
 
@@ -117,26 +118,7 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   ++counters_.frames;
   counters_.last_utime = frame.utime;
 
-  EstimatorStats st;
-  st.utime = frame.utime;
-  st.frame_index = std::int64_t(counters_.frames - 1);
-  st.lio_ms = float(f.lio.lio_ms);
-  st.vio_ms = float(f.vio_ms);
-  st.map_ms = float(f.link.wait_ms);
-  st.total_ms = float(f.total_ms);
-  st.sigma_min = float(std::max(0.0, f.lio.sigma_min));
-  st.degenerate = f.degenerate;
-  st.visual_used = f.visual_used;
-  st.map_timeout = f.link.map_timeout;
-  st.n_points = f.lio.n_points;
-  st.n_planes_matched = f.lio.n_matched;
-  st.n_visual_points = f.n_visual_points;
-  st.n_longterm_visual_points = f.n_longterm_visual_points;
-  st.has_time_offset = f.has_time_offset;
-  st.time_offset_s = f.time_offset_s;
-  st.time_offset_sigma_s = f.time_offset_sigma_s;
-  st.dropped_points = std::int32_t(std::min<std::size_t>(nonfinite, 0x7fffffff));
-  lcm_.publish(channels_.estimator_stats, toMsg(st));
+  lcm_.publish(channels_.estimator_stats, toMsg(frameStats(f, frame.utime, std::int64_t(counters_.frames - 1), nonfinite)));
   if (!f.lio.initialized) {  // no pose yet: say why, once per second of sensor time
     if (log_ && (last_wait_said_ < 0 || toSeconds(frame.utime - last_wait_said_) >= 1.0)) {
       last_wait_said_ = frame.utime;

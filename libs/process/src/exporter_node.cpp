@@ -1,6 +1,7 @@
 #include "livo/process/exporter_node.hpp"
 
 #include "livo/common/timing.hpp"
+#include "livo/io/frame_row.hpp"
 
 #include <iomanip>
 #include <sstream>
@@ -74,21 +75,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
     counters_["frames_without_odometry"] += 1;
   }
   if (p.stats) {
-    const EstimatorStats& s = *p.stats;
-    rec.lio_ms = s.lio_ms;
-    rec.vio_ms = s.vio_ms;
-    rec.map_ms = s.map_ms;
-    rec.total_ms = s.total_ms;
-    rec.sigma_min = s.sigma_min;
-    rec.degenerate = s.degenerate;
-    rec.visual_used = s.visual_used;
-    rec.n_points = s.n_points;
-    rec.n_planes_matched = s.n_planes_matched;
-    rec.n_visual_points = s.n_visual_points;
-    rec.n_longterm_visual_points = s.n_longterm_visual_points;
-    rec.has_time_offset = s.has_time_offset;
-    rec.time_offset_s = s.time_offset_s;
-    rec.time_offset_sigma_s = s.time_offset_sigma_s;
+    applyStats(rec, *p.stats);  // frame_row.hpp
   } else {
     counters_["frames_without_stats"] += 1;
   }

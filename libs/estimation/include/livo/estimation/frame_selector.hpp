@@ -1,4 +1,4 @@
-// LiDAR-degeneration-aware adaptive visual frame selector (ALGORITHMS.md, top, idea 2):
+// LiDAR-degeneration-aware adaptive visual frame selector (docs/algorithms.md "The two ideas", 2):
 //   degenerate LiDAR -> every image runs the visual update;
 //   otherwise only keyframes: the pose moved more than tau = sqrt(3) * sigma_min * tau_predef since
 //   the last visual update, in translation or rotation (sqrt(3) sigma_min is 1 for a perfectly
@@ -40,7 +40,7 @@ class FrameSelector {
   /// Records a frame whose visual update ran: its pose and the covariance before and after the update.
   void markUsed(const NavState& x, const StateCov& P_before, const StateCov& P_after);
 
-  /// Step 3 of the pipeline: feeds one frame's sigma_min (frames with matches only) and returns
+  /// Step 4 of the pipeline (frame_pipeline.hpp): feeds one frame's sigma_min (frames with matches only) and returns
   /// whether the LiDAR is degenerate: sigma_min below degeneracy_threshold for degenerate_frames
   /// frames in a row.
   bool degenerate(bool have_matches, double sigma_min) {

@@ -1,5 +1,5 @@
 // IMU static initialisation, forward propagation with covariance, and the per-sample trace used to
-// undistort LiDAR points (ALGORITHMS.md section 1).
+// undistort LiDAR points (docs/algorithms.md section 1).
 #pragma once
 
 #include "livo/common/config.hpp"
@@ -79,7 +79,7 @@ class ImuPropagator {
   static Pose poseAt(const std::vector<ImuTracePoint>& trace, Utime t);
 
   /// The error-state transition F of one interval of length dt starting at `x` with the raw samples
-  /// `gyro` / `accel` (identity except the blocks of ALGORITHMS.md section 1; what propagate() uses
+  /// `gyro` / `accel` (identity except the blocks of docs/algorithms.md section 1; what propagate() uses
   /// in P' = F P F^T + Q).
   StateCov transition(const NavState& x, const Vec3& gyro, const Vec3& accel, double dt) const;
 

@@ -1,4 +1,4 @@
-// Static IMU initialisation that follows the sensor's configured noise (ALGORITHMS.md section 1).
+// Static IMU initialisation that follows the sensor's configured noise (docs/algorithms.md section 1).
 //
 // Every full window of init_samples samples is tested: it is static when the RMS deviation of its
 // gyro samples is below ImuConfig::staticGyroThreshold() and that of its accelerometer samples (in

@@ -1,5 +1,5 @@
 // Iterated ESIKF update with point-to-plane residuals against the voxel plane map
-// (ALGORITHMS.md section 2), and the degeneracy metric of the matched plane normals.
+// (docs/algorithms.md section 2), and the degeneracy metric of the matched plane normals.
 #pragma once
 
 #include "livo/common/config.hpp"
@@ -54,7 +54,7 @@ struct LioUpdateResult {
 PlaneResidual planeResidual(const NavState& x, const Vec3& p_imu, const Vec3& normal, double d);
 
 /// World covariance of a body point: R S_b R^T + R [p]x P_thth [p]x^T R^T + P_pp (the reference code
-/// omits R in the middle term; ALGORITHMS.md section 2 [quirk]).
+/// omits R in the middle term; docs/algorithms.md section 2 [quirk]).
 Mat3 worldPointCovariance(const NavState& x, const StateCov& P, const BodyPoint& bp);
 
 /// worldPointCovariance for many points at one (x, P): the pose parts once. With q = R p,
@@ -75,14 +75,14 @@ class WorldPointCovariance {
 
 /// Iterated update: re-associates every point with the map in every iteration (information form,
 /// the candidate planes of a point kept while it stays in its voxel: CachedAssociation,
-/// ALGORITHMS.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the
+/// docs/algorithms.md section 2), then updates P once. `x`/`P` are the propagated prior on entry and the
 /// posterior on return. With no match at all the state is left unchanged. With `pool`, the
 /// association runs on its threads in fixed blocks summed in block order: the result is the same for
 /// every thread count, and the same as without a pool.
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
                             const LioConfig& cfg, WorkerPool* pool = nullptr);
 
-/// Degeneracy metric (ALGORITHMS.md, top and section 9): with M = sum n n^T over the N matched unit
+/// Degeneracy metric (docs/algorithms.md "The two ideas", 1, and section 9): with M = sum n n^T over the N matched unit
 /// normals (trace N) and lambda_min its smallest eigenvalue, sigma_min = sqrt(lambda_min / N), in
 /// [0, 1/sqrt(3)] (1/sqrt(3) for three equally represented orthogonal plane families, 0 for parallel
 /// planes; 0 for no normals). The paper's "normalize" admits two readings with this range; this one was

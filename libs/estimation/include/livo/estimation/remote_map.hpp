@@ -17,7 +17,7 @@
 // at the time of the query, so they lag by the updates still in flight (none in lock-step
 // operation); the visual normals are refined against the planes before this frame's insertion;
 // local and long-term visual points compete in one selection grid (the hybrid map keeps one winner
-// per map and cell before merging; the nearer wins in both).
+// per map and cell before merging by the same rule, winsCell in visual_map.hpp).
 #pragma once
 
 #include "livo/estimation/map_access.hpp"

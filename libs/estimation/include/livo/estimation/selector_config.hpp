@@ -10,14 +10,14 @@ namespace livo {
 
 struct SelectorConfig {
   std::string environment = "indoor";  ///< indoor | outdoor
-  double degeneracy_threshold = 0.07;  ///< sigma_min (L2-normalised eigenvalues) below this: degenerate
+  double degeneracy_threshold = 0.07;  ///< sigma_min = sqrt(lambda_min / N) below this: degenerate
   int degenerate_frames = 3;           ///< consecutive degenerate frames before the state is declared
   double tau_translation_m = 1.0;      ///< tau_predef translation (defaults: indoor 1 m, outdoor 2 m)
   double tau_rotation_deg = 60.0;      ///< tau_predef rotation
-  /// Information trigger (an addition to ALGORITHMS.md's selector, frame_selector.hpp): an image is
-  /// also a keyframe when the last visual update's information on the rotation or the position is, along
-  /// some axis, at least this multiple of the filter's own after the LiDAR update: the image would make
-  /// that sigma sqrt(1 + ratio) times smaller (8: three times). 0: off (motion thresholds only).
+  /// Information trigger (not in the paper; docs/algorithms.md section 9): an image is also a keyframe
+  /// when the last visual update's information on the rotation or the position is, along some axis, at
+  /// least this multiple of the filter's own after the LiDAR update: the image would make that sigma
+  /// sqrt(1 + ratio) times smaller (8: three times). 0: off (motion thresholds only).
   double information_ratio = 8.0;
 
   /// Reads `environment` and the `selector` section.

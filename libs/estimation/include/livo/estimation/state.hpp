@@ -1,4 +1,4 @@
-// The filter state of the error-state iterated Kalman filter (ALGORITHMS.md section 1).
+// The filter state of the error-state iterated Kalman filter (docs/algorithms.md section 1).
 //
 // Error state (20-D, in this order): dtheta [0:3] (rotation, right perturbation R Exp(dtheta)),
 // dp [3:6], dtau [6] (inverse exposure time relative to the first image, tau_0 = 1), dv [7:10],
@@ -41,7 +41,7 @@ struct NavState {
   Pose pose() const;
 };
 
-/// Initial covariance (ALGORITHMS.md section 1): 0.01 I, with 1e-5 for tau, biases and gravity; t_d
+/// Initial covariance (docs/algorithms.md section 1): 0.01 I, with 1e-5 for tau, biases and gravity; t_d
 /// (1 ms)^2 as a placeholder that keeps P invertible: no Jacobian has a t_d column unless the offset is
 /// estimated, and then the pipeline sets its prior (camera.time_offset_sigma_s).
 StateCov initialCovariance();

@@ -1,4 +1,4 @@
-// Backward undistortion of a LiDAR sweep to the frame time (ALGORITHMS.md section 1).
+// Backward undistortion of a LiDAR sweep to the frame time (docs/algorithms.md section 1).
 #pragma once
 
 #include "livo/common/types.hpp"

@@ -1,4 +1,4 @@
-// Sequential photometric ESIKF update (ALGORITHMS.md section 4), run after the LiDAR update at the
+// Sequential photometric ESIKF update (docs/algorithms.md section 4), run after the LiDAR update at the
 // same time stamp: coarse-to-fine over the patch pyramid levels, the reference patch warped into the
 // current view by the affine map of its plane, inverse exposure time estimated in the state, an
 // iteration that raises the photometric error rolled back, outliers gated.

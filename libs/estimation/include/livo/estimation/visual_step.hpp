@@ -86,7 +86,7 @@ class SingleVisualOps final : public VisualOpsOn<VisualMap> {
   const PlaneFinder* planes_;
 };
 
-/// New-point candidates without a registered scan (ALGORITHMS.md 5.4, ray casting): for each free
+/// New-point candidates without a registered scan (docs/algorithms.md 5.4, ray casting): for each free
 /// cell of the selection grid, the ray through its centre is stepped from min_depth_m to
 /// max_depth_m by half a LiDAR voxel; the first step near a LiDAR plane of `planes` gives the ray's
 /// intersection with that plane, with the plane's normal.

@@ -52,7 +52,8 @@ struct EstimatorStats {
   std::int64_t frame_index = 0;
   float lio_ms = 0.f;    ///< propagation + undistortion + LiDAR update
   float vio_ms = 0.f;    ///< visual update (0 when not run)
-  float map_ms = 0.f;    ///< map query wait + map update
+  float map_ms = 0.f;    ///< the map's work in the estimator's process (frame_row.hpp)
+  float map_wait_ms = 0.f;  ///< waiting for the map server's answers (0 in one process)
   float total_ms = 0.f;
   float sigma_min = 0.f; ///< normalised smallest singular value of sum n n^T
   bool degenerate = false;

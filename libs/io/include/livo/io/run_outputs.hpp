@@ -37,6 +37,7 @@ struct FrameRecord {
   bool has_pose = false;  ///< false before initialisation: no trajectory line
   Pose T_world_imu = Pose::Identity();
   double lio_ms = 0, vio_ms = 0, map_ms = 0, total_ms = 0;
+  double map_wait_ms = 0;  ///< waiting for the map server (frame_row.hpp: what each time covers)
   double sigma_min = 0;
   bool degenerate = false;
   bool visual_used = false;

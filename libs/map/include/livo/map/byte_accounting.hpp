@@ -1,4 +1,4 @@
-// Byte model of the hybrid map (ALGORITHMS.md section 8, "Memory"): the exact count, a walk of every
+// Byte model of the hybrid map (docs/algorithms.md section 8, "Memory"): the exact count, a walk of every
 // structure (LiDAR octrees, both visual maps, the tile index and the maintenance's work lists), and the
 // O(1) estimate the memory cap is checked on between exact counts: counts times the bytes per item of
 // the last exact count (or defaults), plus the growth since that count (inserted LiDAR points times a

@@ -1,4 +1,4 @@
-// The hybrid map's two visual maps (ALGORITHMS.md "The two ideas", 3): the local visual map (points of
+// The hybrid map's two visual maps (docs/algorithms.md "The two ideas", 3): the local visual map (points of
 // the local cube, where new points go) and the long-term visual map (sparse points with a reference
 // patch that left the local cube). Both are searched for the points in view (the same scan-voxel
 // retrieval in each; per grid cell the nearest of the two winners); per-point operations go to the
@@ -31,8 +31,9 @@ class DualVisualMap {
 
   // --- Per-frame operations of VisualMap, over both maps --------------------------------------------
   ImageGrid gridFor(const CameraModel& cam) const { return local_.gridFor(cam); }
-  /// VisualMap::pointsInView on the local and on the long-term map; per grid cell the winner with the
-  /// smaller depth (ties: smaller id) is kept, ordered by cell. A cell whose local winner is occluded
+  /// VisualMap::pointsInView on the local and on the long-term map; per grid cell one winner by
+  /// winsCell (visual_map.hpp: the nearer, except that a point kept by the long-term map wins within
+  /// vio.occlusion_depth_m of a local one), ordered by cell. A cell whose local winner is occluded
   /// may still receive the long-term winner (each map applies the occlusion test to its own winner).
   std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
                                          const std::vector<Vec3>& scan_points_world,

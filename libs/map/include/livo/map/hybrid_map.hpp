@@ -1,4 +1,4 @@
-// Hybrid map (ALGORITHMS.md "The two ideas", 3; sections 3 "Sliding" and 8 "Memory"), composed of
+// Hybrid map (docs/algorithms.md "The two ideas", 3; sections 3 "Sliding" and 8 "Memory"), composed of
 // parts a reader can name:
 //   - lidar():  the local LiDAR plane map and its root tile index (local_lidar_map.hpp);
 //   - visual(): the local and long-term visual maps, searched together, and the map server's side of

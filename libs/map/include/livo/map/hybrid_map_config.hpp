@@ -1,4 +1,4 @@
-// Configuration of the hybrid map (ALGORITHMS.md "The two ideas", 3; section 3 "Sliding"; section 8
+// Configuration of the hybrid map (docs/algorithms.md "The two ideas", 3; section 3 "Sliding"; section 8
 // "Memory"): a local map (LiDAR planes + visual points) bounded by a cube around the robot, a sparse
 // long-term visual map bounded by a larger cube, and an optional memory cap. Read from the rig
 // config's `map` section; the mode is a command-line choice (livo-run --map-mode) set in code.

@@ -1,4 +1,4 @@
-// The hybrid map's memory cap (memory_cap_mb > 0; ALGORITHMS.md section 8, "Memory"): when the
+// The hybrid map's memory cap (memory_cap_mb > 0; docs/algorithms.md section 8, "Memory"): when the
 // accounted bytes exceed cap_high_water of the cap, the farthest long-term visual points (from the
 // robot, Euclidean) are evicted first, then the farthest local content (LiDAR root voxels by centre and
 // local visual points by position, in one order), content worth the bytes down to cap_low_water of the

@@ -1,4 +1,4 @@
-// Plane fit with uncertainty (ALGORITHMS.md section 3, "Plane fit" and "Plane uncertainty").
+// Plane fit with uncertainty (docs/algorithms.md section 3, "Plane fit" and "Plane uncertainty").
 #pragma once
 
 #include "livo/map/point_cov.hpp"
@@ -34,7 +34,7 @@ bool fitPlane(const std::vector<PointWithCov>& points, double min_eigen_value, P
 /// The same on the map's compact stored points.
 bool fitPlane(const std::vector<MapPoint>& points, double min_eigen_value, Plane& out);
 
-/// Variance of the point-to-plane distance n^T p + d (ALGORITHMS.md section 2):
+/// Variance of the point-to-plane distance n^T p + d (docs/algorithms.md section 2):
 ///   sigma_l = J Sigma_nq J^T + n^T Sigma_p n,  J = [(p - q)^T, -n^T].
 double pointToPlaneVariance(const Plane& plane, const Vec3& p, const Mat3& cov_p);
 

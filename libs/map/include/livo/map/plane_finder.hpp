@@ -1,5 +1,5 @@
 // Plane association shared by the in-process voxel map and the estimator's copy of a submap
-// (ALGORITHMS.md section 2, "Association").
+// (docs/algorithms.md section 2, "Association").
 //
 // PlaneFinder is what the LiDAR update and the visual normal refinement need from a map: the most
 // probable plane for a world point with covariance. VoxelMap implements it over its octrees;
@@ -30,7 +30,7 @@ struct PlaneMatch {
 class PlaneFinder {
  public:
   virtual ~PlaneFinder() = default;
-  /// Most probable plane for a query point (ALGORITHMS.md section 2, "Association"): every plane of
+  /// Most probable plane for a query point (docs/algorithms.md section 2, "Association"): every plane of
   /// the point's root voxel is scored (scorePlaneCandidate: 3-radius and 3-sigma gates, highest
   /// probability wins); if none is accepted (or the voxel does not exist), those of ONE neighbour
   /// root voxel (neighbourVoxelKey). False when no plane passes the gates. The rule is written once,

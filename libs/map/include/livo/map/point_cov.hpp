@@ -1,4 +1,4 @@
-// LiDAR point covariance (ALGORITHMS.md section 2) and the point types the voxel map uses.
+// LiDAR point covariance (docs/algorithms.md section 2) and the point types the voxel map uses.
 #pragma once
 
 #include "livo/common/so3.hpp"

@@ -1,4 +1,4 @@
-// Sliding of the hybrid map (ALGORITHMS.md "The two ideas", 3; section 3 "Sliding"):
+// Sliding of the hybrid map (docs/algorithms.md "The two ideas", 3; section 3 "Sliding"):
 //   - local cube: edge local_edge_m, centred on the robot position of the last slide; a slide happens
 //     once the robot is slide_distance_m from that position (Euclidean). LiDAR root voxels whose centre
 //     leaves the cube are deleted; local visual points whose visual voxel centre leaves it move to the

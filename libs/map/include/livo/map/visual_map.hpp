@@ -1,4 +1,4 @@
-// Visual map (ALGORITHMS.md sections 4.2 and 5): visual points in a hash of root voxels, retrieved
+// Visual map (docs/algorithms.md sections 4.2 and 5): visual points in a hash of root voxels, retrieved
 // per frame from the voxels the current scan touches, created from plane-matched LiDAR points in free
 // grid cells, with observation, reference-selection, normal-refinement and outlier rules.
 //
@@ -48,7 +48,7 @@ struct ImageGrid {
   int cellOf(const Vec2& px) const;
 };
 
-/// A LiDAR point that matched a plane: a candidate for a new visual point (ALGORITHMS.md 5.1).
+/// A LiDAR point that matched a plane: a candidate for a new visual point (docs/algorithms.md 5.1).
 struct NewPointCandidate {
   Vec3 p_world = Vec3::Zero();
   Vec3 normal_world = Vec3::UnitZ();  ///< plane normal (any sign; flipped to face the camera)
@@ -86,7 +86,7 @@ class VisualMap {
   /// The selection grid for a camera (config grid_cell_px).
   ImageGrid gridFor(const CameraModel& cam) const;
 
-  /// Visual points to use for one image (ALGORITHMS.md 4.2). Only the visual voxels that hold a scan
+  /// Visual points to use for one image (docs/algorithms.md 4.2). Only the visual voxels that hold a scan
   /// point (world frame, floor keys) are searched. A point qualifies when it has a reference
   /// observation, lies at depth z >= min_depth_m in the camera frame, projects and lies inside the
   /// border_px border; per grid cell the qualifying point with the smallest depth z wins (ties: smaller
@@ -105,7 +105,7 @@ class VisualMap {
   const std::vector<bool>& occupiedCells() const { return occupied_; }
   const VisualRetrievalStats& lastRetrieval() const { return retrieval_; }
 
-  /// Creates visual points (ALGORITHMS.md 5.1): a candidate qualifies when it lies at depth
+  /// Creates visual points (docs/algorithms.md 5.1): a candidate qualifies when it lies at depth
   /// z >= min_depth_m (in front of the camera: fix of #421), projects inside the border and its cell
   /// is not occupied (`occupied_cells`: one flag per grid cell, or empty = all free). Per free cell the
   /// candidate with the highest Shi-Tomasi score (> min_shi_tomasi) is kept. Each new point gets a new
@@ -117,7 +117,7 @@ class VisualMap {
                 Utime t, const std::vector<NewPointCandidate>& candidates,
                 const std::vector<bool>& occupied_cells);
 
-  /// Adds an observation of `p` at pixel `px` of `gray` (ALGORITHMS.md 5.2) when, compared with the
+  /// Adds an observation of `p` at pixel `px` of `gray` (docs/algorithms.md 5.2) when, compared with the
   /// NEWEST observation (obs.back()), the camera moved more than new_obs_min_translation_m, the view
   /// ray from the point turned more than new_obs_min_angle_deg, or the pixel moved more than
   /// new_obs_min_pixel_shift_px (always when the point has none). Converged points are frozen (no new
@@ -127,7 +127,7 @@ class VisualMap {
   bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
                       float inv_exposure, Utime t);
 
-  /// Reference selection and normal refinement (ALGORITHMS.md 5.3). Scores every observation:
+  /// Reference selection and normal refinement (docs/algorithms.md 5.3). Scores every observation:
   ///   score_i = mean_{j != i} |NCC(level-0 patch i, level-0 patch j)| + cos(ray_i, n),
   /// ray_i = unit vector from the point to camera i. The patches are compared without warping them
   /// into a common view, so NCC is only an approximation of photometric agreement (good for small
@@ -139,7 +139,7 @@ class VisualMap {
   /// observation is kept. `lidar_map` may be null (no normal refinement); a VoxelMap or a PlaneIndex of submap planes.
   void refine(VisualPoint& p, const PlaneFinder* lidar_map);
 
-  /// Outlier bookkeeping (ALGORITHMS.md 5.5): an update with mean_sq_error > gate counts as bad,
+  /// Outlier bookkeeping (docs/algorithms.md 5.5): an update with mean_sq_error > gate counts as bad,
   /// anything else resets the count of consecutive bad updates.
   void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate);
   /// Removes the points that went over max_bad_updates consecutive bad updates (as reported through

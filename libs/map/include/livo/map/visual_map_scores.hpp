@@ -1,4 +1,4 @@
-// Patch scores used by the visual map: Shi-Tomasi corner score for new points (ALGORITHMS.md 5.1) and
+// Patch scores used by the visual map: Shi-Tomasi corner score for new points (docs/algorithms.md 5.1) and
 // zero-mean normalised cross-correlation between stored patches for reference selection (5.3).
 #pragma once
 

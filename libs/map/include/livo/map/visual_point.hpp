@@ -1,5 +1,5 @@
 // Visual map points: LiDAR points that carry small patch pyramids from the images that saw them
-// (ALGORITHMS.md sections 4-5). Unlike the reference code, an observation never keeps a whole image
+// (docs/algorithms.md sections 4-5). Unlike the reference code, an observation never keeps a whole image
 // alive: it stores one small crop per pyramid level (section 8, "Memory" 1).
 #pragma once
 

@@ -1,5 +1,5 @@
 // Integer key of a root voxel: floor(p / voxel_size) per axis (correct for negative coordinates;
-// FAST-LIVO2 truncates there, ALGORITHMS.md section 3 [quirk]).
+// FAST-LIVO2 truncates there, docs/algorithms.md section 3 [quirk]).
 #pragma once
 
 #include "livo/common/so3.hpp"

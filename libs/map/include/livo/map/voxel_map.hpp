@@ -1,4 +1,4 @@
-// LiDAR voxel plane map (ALGORITHMS.md sections 2, 3 and 8): a hash of root voxels, each the root of
+// LiDAR voxel plane map (docs/algorithms.md sections 2, 3 and 8): a hash of root voxels, each the root of
 // an octree of planes with uncertainty, built and updated incrementally from world points with
 // covariances, and searched for the most probable plane of a query point.
 //
@@ -47,12 +47,12 @@ class VoxelMap : public PlaneFinder {
   VoxelMap& operator=(const VoxelMap&) = delete;
 
   /// Builds and updates the map in one: each point goes to its root voxel (created when new) and
-  /// descends the octree (ALGORITHMS.md section 3). Points with non-finite coordinates or beyond
+  /// descends the octree (docs/algorithms.md section 3). Points with non-finite coordinates or beyond
   /// |p| / voxel_size >= 2^52 are skipped. Returns the number of points taken.
   std::size_t insert(const std::vector<PointWithCov>& points);
 
   using PlaneMatch = livo::PlaneMatch;
-  /// findBestPlane (PlaneFinder, ALGORITHMS.md section 2, "Association"): every plane leaf of the
+  /// findBestPlane (PlaneFinder, docs/algorithms.md section 2, "Association"): every plane leaf of the
   /// point's root voxel is a candidate when the in-plane distance
   /// sqrt(|p - q|^2 - d^2) <= sigma_num * radius and |d| < sigma_num * sqrt(sigma_l), with
   /// sigma_l = J Sigma_nq J^T + n^T Sigma_w n, J = [(p - q)^T, -n^T]; the highest

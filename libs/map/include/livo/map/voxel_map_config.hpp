@@ -1,4 +1,4 @@
-// Configuration of the LiDAR voxel plane map (ALGORITHMS.md section 3, FAST-LIVO2 "lio" keys).
+// Configuration of the LiDAR voxel plane map (docs/algorithms.md section 3, FAST-LIVO2 "lio" keys).
 #pragma once
 
 #include "livo/common/config.hpp"

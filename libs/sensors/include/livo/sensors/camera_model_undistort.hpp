@@ -1,5 +1,5 @@
 // Undistortion lookup tables for any CameraModel (pinhole-radtan and fisheye alike; FAST-LIVO2's
-// Equidistant camera has none, which crashes its COLMAP export, ALGORITHMS.md §8 #246).
+// Equidistant camera has none, which crashes its COLMAP export, docs/algorithms.md §8 #246).
 //
 // For every pixel (u, v) of an ideal, distortion-free pinhole image, the table holds the pixel of the real
 // camera that sees the same ray: bearing ~ (( u - cx) / fx, (v - cy) / fy, 1), px = camera.project(bearing).

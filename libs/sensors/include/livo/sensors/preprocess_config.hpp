@@ -1,4 +1,4 @@
-// Configuration of the sensor preprocessing and the scan recombiner (ALGORITHMS.md section 6).
+// Configuration of the sensor preprocessing and the scan recombiner (docs/algorithms.md section 6).
 //
 // Keys come from the rig sections (lidar, imu, camera; config/README.md) and from the estimator
 // section `preprocess`, listed below with their defaults. Only these keys are read: other modules read

@@ -1,4 +1,4 @@
-// Scan recombination (ALGORITHMS.md section 6): recuts the LiDAR stream into estimator frames.
+// Scan recombination (docs/algorithms.md section 6): recuts the LiDAR stream into estimator frames.
 //
 // Camera mode (camera_enabled): one frame per kept image, at its time t_c. The sweep holds the points
 // with absolute time in (t_last, t_c] (t_last = previous frame time; the first sweep starts at, and
