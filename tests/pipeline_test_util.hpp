@@ -34,9 +34,11 @@ struct RunSummary {
   livo::ImageCheckCounters image_counters;
   std::vector<bool> lidar_failed;  ///< per pose in `est`: its LiDAR update failed
   double t_start = 0.0;            ///< first simulated sample, seconds
-  /// camera.estimate_time_offset: (seconds after the first sample, estimate s, sigma s) per frame.
+  /// camera.estimate_time_offset: (seconds after the first sample, estimate s, sigma s, whether the
+  /// frame reset it to the prior) per frame.
   struct TimeOffset {
     double t, estimate, sigma;
+    bool reset = false;
   };
   std::vector<TimeOffset> time_offset;
   std::size_t time_offset_resets = 0;
@@ -88,7 +90,8 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
     out.visual_frames += r.visual_used;
     sigma_sum += r.lio.sigma_min;
     lio_ms.push_back(r.lio.lio_ms);
-    if (r.has_time_offset) out.time_offset.push_back({t - t_start, r.time_offset_s, r.time_offset_sigma_s});
+    if (r.has_time_offset)
+      out.time_offset.push_back({t - t_start, r.time_offset_s, r.time_offset_sigma_s, r.reset_time_offset});
     out.time_offset_resets += r.reset_time_offset;
   };
   sim::SimCallbacks cb;

@@ -146,7 +146,13 @@ TEST(FrameSelector, InformationTurnsWithTheBody) {
   EXPECT_EQ(a.informationRatio(stateAt(Vec3::Zero(), R1), bad), 0.0);
   StateCov nan = Pnow;
   nan(4, 4) = std::nan("");
-  EXPECT_TRUE(std::isfinite(a.informationRatio(stateAt(Vec3::Zero(), R1), nan)));
+  // A NaN in the position marginal leaves the rotation's ratio: the same as with a position marginal
+  // that no image could shrink.
+  StateCov rot_only = Pnow;
+  rot_only.block<3, 3>(3, 3) = 1e-30 * Mat3::Identity();
+  const double expect_rot = a.informationRatio(stateAt(Vec3::Zero(), R1), rot_only);
+  EXPECT_GT(expect_rot, 0.0);
+  EXPECT_NEAR(a.informationRatio(stateAt(Vec3::Zero(), R1), nan), expect_rot, 1e-9 * expect_rot);
 }
 
 // Without motion, an image is used exactly when the last one would shrink a sigma by

@@ -70,12 +70,18 @@ TEST(PipelineTimeOffset, EstimateBeyondThreeSigmasIsResetAndCounted) {
   });
   ASSERT_FALSE(est.time_offset.empty());
   EXPECT_GT(est.time_offset_resets, 0u);
+  std::size_t reset_frames = 0;
   for (const auto& e : est.time_offset) {
     ASSERT_TRUE(std::isfinite(e.estimate) && std::isfinite(e.sigma));
-    EXPECT_LE(std::abs(e.estimate), 3 * 0.005 + 1e-12);  // reported after the reset
+    if (!e.reset) continue;
+    // A reset frame reports the prior: the rig's offset (0) with the prior's sigma.
+    ++reset_frames;
+    EXPECT_EQ(e.estimate, 0.0) << "at " << e.t << " s";
+    EXPECT_DOUBLE_EQ(e.sigma, 0.005) << "at " << e.t << " s";
   }
+  EXPECT_EQ(reset_frames, est.time_offset_resets);
   for (const auto& p : est.est) ASSERT_TRUE(p.T_world_body.matrix().allFinite());
   std::printf("[ offset   ] 40 ms delay: %zu resets, ATE %.3f cm\n", est.time_offset_resets,
               100 * est.eval.ate.translation_m.rmse);
-  EXPECT_LT(est.eval.ate.translation_m.rmse, 0.05);
+  EXPECT_LT(est.eval.ate.translation_m.rmse, 0.01);  // measured 0.443 cm (2026-12-05); about twice
 }
