@@ -228,6 +228,70 @@ TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
   EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
 }
 
+// Drain on stop: SIGINT as soon as the player has sent the last message (no idle wait): what the
+// preprocessor had received is handled and the frames it completes are published before it exits.
+TEST(ProcessNetns, PreprocessDrainsOnSigint) {
+  Netns ns;
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
+  const std::string dir = tempDir("preprocess_drain");
+  const test::SensorStream stream = test::makeSensorStream(2.0);
+  {
+    LogWriter w(dir + "/in.lcm");
+    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
+  }
+  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
+               dir + "/logger.txt");
+  Child pre(ns.exec({kBin + "/livo-preprocess", "--config", dir + "/rig.yaml", "--lcm-url", kUrl}),
+            dir + "/preprocess.txt");
+  ASSERT_TRUE(saysWithin(dir + "/logger.txt", "Opening log file", 60)) << readFile(dir + "/logger.txt");
+  ASSERT_TRUE(saysWithin(dir + "/preprocess.txt", " on " + kUrl, 60)) << readFile(dir + "/preprocess.txt");
+  Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=4", dir + "/in.lcm"}), dir + "/player.txt");
+  EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
+  pre.signal(SIGINT);
+  EXPECT_EQ(pre.wait(60), 0) << readFile(dir + "/preprocess.txt");
+  // The frames arrive in a burst at the stop: lcm-logger writes the last one out when it closes.
+  waitUntil([&] { return completeEvents(dir + "/out.lcm") >= 20; }, 30);
+  logger.signal(SIGINT);
+  logger.wait(30);
+  const std::string out = readFile(dir + "/preprocess.txt");
+  EXPECT_NE(out.find("Interrupt"), std::string::npos) << out;
+  // Every message sent was received and every frame published: the same 21 frames as with --idle-exit.
+  EXPECT_NE(out.find("frames published 21 (20 with image"), std::string::npos) << out;
+  EXPECT_EQ(completeEvents(dir + "/out.lcm"), 21u);
+}
+
+// Drain on stop: SIGINT as soon as the player is done; the exporter writes all 20 frames.
+TEST(ProcessNetns, ExporterDrainsOnSigint) {
+  Netns ns;
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
+  const std::string dir = tempDir("exporter_drain");
+  const auto frames = test::makeEstimatorFrames(20);
+  {
+    LogWriter w(dir + "/est.lcm");
+    for (const auto& f : frames) {
+      w.write("LIVO_ODOMETRY", f.odom.utime, toMsg(f.odom));
+      w.write("LIVO_REGISTERED_SCAN", f.odom.utime + 10, toMsg(f.scan));
+      w.write("LIVO_ESTIMATOR_STATS", f.odom.utime + 20, toMsg(f.stats));
+    }
+  }
+  std::ofstream(dir + "/rig.yaml") << "exporter: {map_voxel_m: 0.05, octomap_resolution_m: 0.1}\n";
+  Child exporter(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out",
+                          dir + "/out"}),
+                 dir + "/exporter.txt");
+  ASSERT_TRUE(saysWithin(dir + "/exporter.txt", " on " + kUrl, 60)) << readFile(dir + "/exporter.txt");
+  Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=8", dir + "/est.lcm"}), dir + "/player.txt");
+  EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
+  exporter.signal(SIGINT);
+  EXPECT_EQ(exporter.wait(60), 0) << readFile(dir + "/exporter.txt");
+  const std::string log = readFile(dir + "/exporter.txt");
+  EXPECT_NE(log.find("frames 20 (poses 19"), std::string::npos) << log;
+  EXPECT_EQ(readTum(dir + "/out/trajectory.tum").size(), 19u);
+  EXPECT_EQ(countLines(dir + "/out/frames.csv"), 21u);
+}
+
 TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   Netns ns;
   if (!ns.ok) LIVO_SKIP() << ns.why;

@@ -73,7 +73,10 @@ int main(int argc, char** argv) {
       }
     };
     const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s, poll);
-    node.poll();  // what is still queued
+    // Drain on stop: the messages already received (in the socket) are handled, then every queued
+    // frame is processed and published before the exit.
+    lcm.drainOnStop();
+    node.poll();
     std::cerr << "livo-estimator: "
               << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")

@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
     std::cerr << "livo-exporter: " << channels.odometry << " + " << channels.estimator_stats << " + "
               << channels.registered_scan << " + " << channels.map_stats << " on " << url << " -> " << out << "\n";
     const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s);
+    lcm.drainOnStop();  // drain on stop: the messages already received are written too
     std::cerr << "livo-exporter: "
               << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")

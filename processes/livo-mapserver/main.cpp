@@ -84,6 +84,8 @@ int main(int argc, char** argv) {
       }
     };
     const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s, poll);
+    lcm.drainOnStop();  // drain on stop: updates already received go into the map that is saved
+    poll();
     std::cerr << "livo-mapserver: "
               << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")

@@ -55,7 +55,8 @@ int main(int argc, char** argv) {
               << (cfg.camera_enabled ? "" : " (camera disabled)") << " -> " << channels.frame << " on " << url
               << "\n";
     const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s);
-    node.finish();
+    lcm.drainOnStop();    // drain on stop: the messages already received are handled,
+    node.finish();  // and the frames they complete are published
     std::cerr << "livo-preprocess: "
               << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")

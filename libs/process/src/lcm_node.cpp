@@ -100,6 +100,13 @@ int LcmNode::drain() {
   return n;
 }
 
+int LcmNode::drainOnStop(double max_s) {
+  Stopwatch watch;
+  int n = 0;
+  while (watch.elapsedMs() < 1000.0 * max_s && handleOnce(0)) ++n;
+  return n;
+}
+
 bool LcmNode::handleOnce(int timeout_ms) {
   errno = 0;
   const int r = lcm_->handleTimeout(timeout_ms);

@@ -95,6 +95,9 @@ class LcmNode {
   bool dispatch(const std::string& channel, const void* data, std::size_t size);
   /// Handles every message already queued, without waiting; returns how many.
   int drain();
+  /// Drain on stop: handles the messages already received, without waiting for more, for at most
+  /// `max_s` seconds (a sender that keeps publishing cannot hold the exit); returns how many.
+  int drainOnStop(double max_s = 2.0);
   /// Waits up to `timeout_ms` for one message and handles it; false on timeout or interruption.
   /// Throws std::runtime_error when LCM reports an error (other than an interrupting signal).
   bool handleOnce(int timeout_ms);
