@@ -82,7 +82,7 @@ void writeRigConfig(const SimScenario& sc, std::ostream& out) {
     out << "camera:\n  enabled: false\n\n";
   }
   out << "selector:\n"
-      << "  degeneracy_threshold: 0.07\n"
+      << "  degeneracy_threshold: 0.15\n"
       << "  degenerate_frames: 3\n"
       << "  tau_translation_m: " << (outdoor ? "2.0" : "1.0") << "\n"
       << "  tau_rotation_deg: 60.0\n";

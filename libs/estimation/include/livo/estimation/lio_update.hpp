@@ -85,10 +85,8 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
 /// Degeneracy metric (docs/algorithms.md "The two ideas", 1, and section 9): with M = sum n n^T over the N matched unit
 /// normals (trace N) and lambda_min its smallest eigenvalue, sigma_min = sqrt(lambda_min / N), in
 /// [0, 1/sqrt(3)] (1/sqrt(3) for three equally represented orthogonal plane families, 0 for parallel
-/// planes; 0 for no normals). The paper's "normalize" admits two readings with this range; this one was
-/// chosen on the simulator: the L2 reading (lambda_min / ||lambda||) flagged 96 of 601 frames of the
-/// furnished room (60 s) against 55 here, while both keep every corridor and wall frame below 0.07
-/// (corridor mean 0.011, wall 0.012, room 0.33 with this reading).
+/// planes; 0 for no normals). The paper's "normalize" admits two readings with this range; this one
+/// and its threshold (selector.degeneracy_threshold) are discussed in docs/algorithms.md section 9.
 double degeneracySigmaMin(const std::vector<Vec3>& normals);
 
 }  // namespace livo

@@ -10,7 +10,7 @@ namespace livo {
 
 struct SelectorConfig {
   std::string environment = "indoor";  ///< indoor | outdoor
-  double degeneracy_threshold = 0.07;  ///< sigma_min = sqrt(lambda_min / N) below this: degenerate
+  double degeneracy_threshold = 0.15;  ///< sigma_min = sqrt(lambda_min / N) below this: degenerate
   int degenerate_frames = 3;           ///< consecutive degenerate frames before the state is declared
   double tau_translation_m = 1.0;      ///< tau_predef translation (defaults: indoor 1 m, outdoor 2 m)
   double tau_rotation_deg = 60.0;      ///< tau_predef rotation
