@@ -70,6 +70,18 @@ TEST(FrameSelector, MotionThresholdsFollowSigmaMin) {
   EXPECT_TRUE(sel.select(x0, P, 0.3, false)) << "the first image is always used";
   sel.markUsed(x0, P, P);
   const double smin = 0.3;
+  // Until the LiDAR has constrained every direction for degenerate_frames (3) frames in a row, every
+  // image is used (an unproven start); then the motion thresholds decide.
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_FALSE(sel.constrainedOnce());
+    EXPECT_TRUE(sel.select(stateAt(Vec3::Zero(), Mat3::Identity()), P, smin, false)) << "frame " << i;
+    EXPECT_FALSE(sel.degenerate(true, i == 1 ? 0.01 : smin)) << "frame " << i;  // a low frame restarts the run
+  }
+  EXPECT_FALSE(sel.degenerate(true, smin));  // the second good frame in a row
+  EXPECT_FALSE(sel.constrainedOnce());
+  EXPECT_TRUE(sel.select(stateAt(Vec3::Zero(), Mat3::Identity()), P, smin, false));
+  EXPECT_FALSE(sel.degenerate(true, smin));  // the third
+  EXPECT_TRUE(sel.constrainedOnce()) << "three frames at or above the threshold in a row";
   const double tau_t = std::sqrt(3.0) * smin * 1.0;               // indoor tau_predef 1 m
   const double tau_r = std::sqrt(3.0) * smin * 60.0 * M_PI / 180;  // and 60 deg
   EXPECT_NEAR(sel.translationThreshold(smin), tau_t, 1e-12);
@@ -166,6 +178,7 @@ TEST(FrameSelector, InformationTriggerDecidesWithoutMotion) {
     SelectorConfig cfg;
     cfg.information_ratio = ratio;
     FrameSelector sel(cfg, VisualMode::Adaptive);
+    for (int i = 0; i < cfg.degenerate_frames; ++i) sel.degenerate(true, 0.4);  // a constrained LiDAR
     sel.markUsed(x, Pb, Pa);
     StateCov P = 1e-6 * StateCov::Identity();
     EXPECT_NEAR(sel.informationRatio(x, P), 1.0, 1e-9);

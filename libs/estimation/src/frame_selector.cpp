@@ -77,7 +77,7 @@ bool FrameSelector::select(const NavState& x, const StateCov& P, double sigma_mi
     case VisualMode::All: return true;
     case VisualMode::Adaptive: break;
   }
-  if (degenerate || !have_last_) return true;
+  if (degenerate || !have_last_ || !constrained_once_) return true;
   const double dt = (x.p_world_imu - last_.p_world_imu).norm();
   const double dr = rotationAngle(last_.R_world_imu.transpose() * x.R_world_imu);
   if (dt > translationThreshold(sigma_min) || dr > rotationThreshold(sigma_min)) return true;
