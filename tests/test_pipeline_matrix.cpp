@@ -1,10 +1,10 @@
 // The random rig matrix's CI subset (issue "Any rig, any start"; scripts/bench --matrix runs the full
-// one): seven rigs drawn by livo::sim::drawRandomScenario (the distribution of config/sim/README.md,
+// one): eight rigs drawn by livo::sim::drawRandomScenario (the distribution of config/sim/README.md,
 // section "Random rigs") with fixed seeds, 12 s each, adaptive + hybrid in one process against the
 // simulator's ground truth, each held to the matrix's pass criteria: first pose at most 3 s after the
 // first data, no gap between poses over 0.5 s after it, ATE at most max(5 cm, 0.5 % of the path), no
-// NaN. The seeds cover rooms, a corridor and walls; starts at rest, briefly at rest and in motion;
-// Avia and Mid-360; IMUs from 1x to 13x the shipped noise at 200-400 Hz; pinhole and fisheye cameras
+// NaN. The seeds cover rooms, a corridor, walls and streets; starts at rest, briefly at rest and in motion;
+// Avia, Mid-360 and a spinning 32-beam; IMUs from 1x to 14x the shipped noise at 100-400 Hz; pinhole and fisheye cameras
 // at 10-30 Hz (see the printed summary lines).
 // livo-test-long: 900
 // livo-test-deps: livo_sim livo_estimation livo_eval
@@ -44,10 +44,13 @@ TEST_P(RandomRig, StartsEarlyHoldsAndStaysAccurate) {
 // Seeds: the first seven draws of the distribution. Seed 5 (a street, a forward Avia at 5 Hz, a car
 // at 5.9 m/s from the first sample) failed with 3.9 m ATE over 12 s until the motion initialiser's
 // first fixes searched for the translation (2026-12-04: 1.65 cm); seeds 1 and 4 (walls) check that the
-// search and the fixes' velocity stay off where the geometry leaves a direction free. Seeds 10 and 12
-// (a wall and a corridor, moving starts, 5 Hz cameras) fail over 30 s and are not in the subset;
-// scripts/bench --matrix runs them all.
-INSTANTIATE_TEST_SUITE_P(Matrix, RandomRig, ::testing::Values(1, 2, 3, 4, 5, 6, 7));
+// search and the fixes' velocity stay off where the geometry leaves a direction free. Seed 6 (a small
+// room, the Avia seeing mostly one wall) needs the degeneracy threshold 0.15 over 30 s. Seed 28 (a
+// street, spinning 32-beam LiDAR, 100 Hz consumer IMU, car at 8.8 m/s from the first sample) slid along
+// the street before the first visual update: 3.07 m ATE over 12 s until the selector used every image
+// of an unproven start (2026-12-05: 20.3 cm, bound 0.5 % of 64 m). Seed 12 (a corridor, moving start,
+// 320 x 240 camera at 5 Hz) fails and is not in the subset; scripts/bench --matrix runs them all.
+INSTANTIATE_TEST_SUITE_P(Matrix, RandomRig, ::testing::Values(1, 2, 3, 4, 5, 6, 7, 28));
 
 // The draw is a pure function of the seed, and every draw is a valid scenario.
 TEST(RandomRigDraw, DeterministicAndValid) {
