@@ -176,17 +176,39 @@ TEST(ProcessBinaries, PrintConfigLoadsBackAndIsAFixedPoint) {
 
 // ---------------------------------------------------------------- processes in a network namespace
 
+/// 2 s of sensor messages as an LCM log (dir/in.lcm) and a rig for them (dir/rig.yaml).
+test::SensorStream writeSensorLog(const std::string& dir) {
+  test::SensorStream stream = test::makeSensorStream(2.0);
+  LogWriter w(dir + "/in.lcm");
+  for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
+  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  return stream;
+}
+
+/// The estimator's outputs for 20 frames (19 poses) as an LCM log.
+void writeEstimatorLog(const std::string& path) {
+  LogWriter w(path);
+  for (const auto& f : test::makeEstimatorFrames(20)) {
+    w.write("LIVO_ODOMETRY", f.odom.utime, toMsg(f.odom));
+    w.write("LIVO_REGISTERED_SCAN", f.odom.utime + 10, toMsg(f.scan));
+    w.write("LIVO_ESTIMATOR_STATS", f.odom.utime + 20, toMsg(f.stats));
+    if (f.has_map_stats) w.write("LIVO_MAP_STATS", f.odom.utime + 30, toMsg(f.map_stats));
+  }
+}
+
+/// livo-exporter in `ns` writing to dir/out, its log dir/exporter.txt.
+Child startExporter(const Netns& ns, const std::string& dir) {
+  std::ofstream(dir + "/rig.yaml") << "exporter: {map_voxel_m: 0.05, octomap_resolution_m: 0.1}\n";
+  return Child(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out", dir + "/out"}),
+               dir + "/exporter.txt");
+}
+
 TEST(ProcessNetns, PreprocessTurnsAReplayedLogIntoFrames) {
   Netns ns;
   if (!ns.ok) LIVO_SKIP() << ns.why;
   if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
   const std::string dir = tempDir("preprocess");
-  const test::SensorStream stream = test::makeSensorStream(2.0);
-  {
-    LogWriter w(dir + "/in.lcm");
-    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
-  }
-  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  const test::SensorStream stream = writeSensorLog(dir);
 
   Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
                dir + "/logger.txt");
@@ -235,12 +257,7 @@ TEST(ProcessNetns, PreprocessDrainsOnSigint) {
   if (!ns.ok) LIVO_SKIP() << ns.why;
   if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
   const std::string dir = tempDir("preprocess_drain");
-  const test::SensorStream stream = test::makeSensorStream(2.0);
-  {
-    LogWriter w(dir + "/in.lcm");
-    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
-  }
-  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  const test::SensorStream stream = writeSensorLog(dir);
   Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_FRAME", dir + "/out.lcm"}),
                dir + "/logger.txt");
   Child pre(ns.exec({kBin + "/livo-preprocess", "--config", dir + "/rig.yaml", "--lcm-url", kUrl}),
@@ -269,19 +286,8 @@ TEST(ProcessNetns, ExporterDrainsOnSigint) {
   if (!ns.ok) LIVO_SKIP() << ns.why;
   if (!haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const std::string dir = tempDir("exporter_drain");
-  const auto frames = test::makeEstimatorFrames(20);
-  {
-    LogWriter w(dir + "/est.lcm");
-    for (const auto& f : frames) {
-      w.write("LIVO_ODOMETRY", f.odom.utime, toMsg(f.odom));
-      w.write("LIVO_REGISTERED_SCAN", f.odom.utime + 10, toMsg(f.scan));
-      w.write("LIVO_ESTIMATOR_STATS", f.odom.utime + 20, toMsg(f.stats));
-    }
-  }
-  std::ofstream(dir + "/rig.yaml") << "exporter: {map_voxel_m: 0.05, octomap_resolution_m: 0.1}\n";
-  Child exporter(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out",
-                          dir + "/out"}),
-                 dir + "/exporter.txt");
+  writeEstimatorLog(dir + "/est.lcm");
+  Child exporter = startExporter(ns, dir);
   ASSERT_TRUE(saysWithin(dir + "/exporter.txt", " on " + kUrl, 60)) << readFile(dir + "/exporter.txt");
   Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=8", dir + "/est.lcm"}), dir + "/player.txt");
   EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
@@ -298,20 +304,8 @@ TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   if (!ns.ok) LIVO_SKIP() << ns.why;
   if (!haveTool("lcm-logplayer")) LIVO_SKIP() << "lcm-logplayer missing";
   const std::string dir = tempDir("exporter");
-  const auto frames = test::makeEstimatorFrames(20);
-  {
-    LogWriter w(dir + "/est.lcm");
-    for (const auto& f : frames) {
-      w.write("LIVO_ODOMETRY", f.odom.utime, toMsg(f.odom));
-      w.write("LIVO_REGISTERED_SCAN", f.odom.utime + 10, toMsg(f.scan));
-      w.write("LIVO_ESTIMATOR_STATS", f.odom.utime + 20, toMsg(f.stats));
-      if (f.has_map_stats) w.write("LIVO_MAP_STATS", f.odom.utime + 30, toMsg(f.map_stats));
-    }
-  }
-  std::ofstream(dir + "/rig.yaml") << "exporter: {map_voxel_m: 0.05, octomap_resolution_m: 0.1}\n";
-  Child exporter(ns.exec({kBin + "/livo-exporter", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--out",
-                          dir + "/out"}),
-                 dir + "/exporter.txt");
+  writeEstimatorLog(dir + "/est.lcm");
+  Child exporter = startExporter(ns, dir);
   ASSERT_TRUE(saysWithin(dir + "/exporter.txt", " on " + kUrl, 60)) << readFile(dir + "/exporter.txt");
   Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=2", dir + "/est.lcm"}), dir + "/player.txt");
   EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
@@ -415,12 +409,7 @@ TEST(RunLocal, ReplayScriptOfLivoPmdRunsTheChainAndStopsIt) {
   fs::permissions(dir + "/bin/stand-in", fs::perms::owner_all);
   fs::create_symlink("stand-in", dir + "/bin/livo-estimator");
   fs::create_symlink("stand-in", dir + "/bin/livo-mapserver");
-  const test::SensorStream stream = test::makeSensorStream(2.0);
-  {
-    LogWriter w(dir + "/in.lcm");
-    for (const auto& ev : stream.events) w.write(ev.channel, ev.send_utime, ev.bytes.data(), ev.bytes.size());
-  }
-  std::ofstream(dir + "/rig.yaml") << "imu: {rate_hz: 200.0}\nlidar: {blind_m: 0.5}\ncamera: {enabled: true}\n";
+  const test::SensorStream stream = writeSensorLog(dir);
   Child rl(ns.exec({std::string(LIVO_SOURCE_DIR) + "/procman/run-local", "replay", "--var", "LOG=" + dir + "/in.lcm",
                     "--var", "LIVO_BIN=" + dir + "/bin", "--var", "LIVO_CONFIG=" + dir + "/rig.yaml", "--var",
                     "LIVO_OUT=" + dir + "/out", "--var", "LIVO_SPEED=2", "--var", "LIVO_LCM_URL=" + kUrl}),
