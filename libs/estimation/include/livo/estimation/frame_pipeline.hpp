@@ -7,7 +7,8 @@
 //   3. the iterated point-to-plane LiDAR update; the registered points go into the map;
 //   4. degeneracy of the matched plane normals (sigma_min, several frames in a row); a frame whose
 //      LiDAR update failed counts as degenerate (and its scan does not go into the map);
-//   5. frame selection (adaptive: keyframes unless degenerate; all; off);
+//   5. frame selection (adaptive: every image of an unproven start, then keyframes unless degenerate;
+//      all; off);
 //   6. on a selected image: the photometric update and the visual map's changes;
 //   7. the frame's end at its final state (map maintenance, or the update message to the map server).
 // Every decision of the frame (the image check, the degeneracy rule, the selector, when the visual
