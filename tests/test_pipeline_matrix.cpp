@@ -1,5 +1,5 @@
 // The random rig matrix's CI subset (issue "Any rig, any start"; scripts/bench --matrix runs the full
-// one): eight rigs drawn by livo::sim::drawRandomScenario (the distribution of config/sim/README.md,
+// one): nine rigs drawn by livo::sim::drawRandomScenario (the distribution of config/sim/README.md,
 // section "Random rigs") with fixed seeds, 12 s each, adaptive + hybrid in one process against the
 // simulator's ground truth, each held to the matrix's pass criteria: first pose at most 3 s after the
 // first data, no gap between poses over 0.5 s after it, ATE at most max(5 cm, 0.5 % of the path), no
@@ -50,7 +50,11 @@ TEST_P(RandomRig, StartsEarlyHoldsAndStaysAccurate) {
 // the street before the first visual update: 3.07 m ATE over 12 s until the selector used every image
 // of an unproven start (2026-12-05: 20.3 cm, bound 0.5 % of 64 m). Seed 12 (a corridor, moving start,
 // 320 x 240 camera at 5 Hz) fails and is not in the subset; scripts/bench --matrix runs them all.
-INSTANTIATE_TEST_SUITE_P(Matrix, RandomRig, ::testing::Values(1, 2, 3, 4, 5, 6, 7, 28));
+// Seed 33 (a street, a sparse Mid-360 whose first scans give planes one scan line wide, the car at rest
+// for 2.2 s): the motion initialiser's failed fixes refuted the IMU's rest and the coarse start followed
+// the same planes off, 40.6 m ATE over 12 s, until fixes that fit no motion could no longer refute rest
+// when the scans match the first scan at its position (2026-12-05: 1.89 cm, bound 5 cm).
+INSTANTIATE_TEST_SUITE_P(Matrix, RandomRig, ::testing::Values(1, 2, 3, 4, 5, 6, 7, 28, 33));
 
 // The draw is a pure function of the seed, and every draw is a valid scenario.
 TEST(RandomRigDraw, DeterministicAndValid) {

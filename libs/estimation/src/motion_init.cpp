@@ -26,7 +26,7 @@ void MotionInitConfig::load(const ConfigNode& n) {
 MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio,
                                      int min_matches, PreparePoints prepare)
     : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), prepare_(std::move(prepare)),
-      map_(std::make_unique<VoxelMap>(map)), occupancy_(0.15, 5) {}
+      map_(std::make_unique<VoxelMap>(map)), first_map_(std::make_unique<VoxelMap>(map)), occupancy_(0.15, 5) {}
 
 namespace {
 
@@ -91,6 +91,14 @@ bool MotionInitializer::start(const Frame& frame) {
   points_ = prepare_(frame.sweep, trace);
   if (points_.empty()) return false;
   insert(points_, Mat3::Identity(), Vec3::Zero());
+  {
+    std::vector<PointWithCov> world;
+    world.reserve(points_.size());
+    const WorldPointCovariance point_cov(NavState{}, StateCov::Zero());
+    for (const auto& bp : points_) world.push_back({bp.p_imu, point_cov(bp, bp.p_imu)});
+    first_map_->clear();
+    first_map_->insert(world);
+  }
   fixes_.push_back({frame.utime, Mat3::Identity(), Vec3::Zero()});
   started_ = true;
   last_utime_ = frame.utime;
@@ -224,11 +232,25 @@ bool MotionInitializer::process(const Frame& frame) {
       rebuildMap(false);
     }
   }
+  std::vector<ImuTracePoint> rest_trace;
+  {
+    std::vector<ImuSample> held = frame.imu;
+    if (!samples_.empty()) held.insert(held.begin(), samples_.back());
+    rest_trace = gyroTrace(held, last.utime, frame.utime, last.R, Vec3::Zero(), Vec3::Zero());
+  }
   samples_.insert(samples_.end(), frame.imu.begin(), frame.imu.end());
   if (fixes_.size() >= 3) occupancy_.clear();
   if (points_.empty() || !registerFrame(R_pred, p_pred, R, p)) return solved_;
+  Fix fix{frame.utime, R, p};
+  {
+    // The rest test's evidence: the scan undistorted at rest (gyro rotation, no translation) against
+    // the first scan alone, at the first scan's position and at the fix.
+    const std::vector<BodyPoint> at_rest = prepare_(frame.sweep, rest_trace);
+    fix.matches_at_origin = firstMapMatches(at_rest, R, Vec3::Zero());
+    fix.matches_at_fix = firstMapMatches(at_rest, R, p);
+  }
   if (const Fix* base = fixBefore(frame.utime)) v_cv_ = (p - base->p) / toSeconds(frame.utime - base->utime);
-  fixes_.push_back({frame.utime, R, p});
+  fixes_.push_back(fix);
   if (!rebuilt_ && fixes_.size() == 2) rebuildMap(true);
   else insert(points_, R, p);
   Solution s;
@@ -382,6 +404,33 @@ void MotionInitializer::takeOver(NavState& x, StateCov& P) {
   map_.reset();
 }
 
+int MotionInitializer::firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) const {
+  NavState x;
+  x.R_world_imu = R;
+  x.p_world_imu = p;
+  const WorldPointCovariance point_cov(x, StateCov::Zero());
+  int n = 0;
+  for (const auto& bp : pts) {
+    const Vec3 q = R * bp.p_imu;
+    PlaneMatch m;
+    if (first_map_->findBestPlane({q + p, point_cov(bp, q)}, m)) ++n;
+  }
+  return n;
+}
+
+bool MotionInitializer::fixesFailedAtRest(Utime from) const {
+  if (!check_.done || !(check_.rms > 3.0 * fixSigma(lio_))) return false;  // the fixes fit one motion
+  // Summed over the fixes: a frame cut milliseconds after the last (at an image) holds few points.
+  int n = 0, at_origin = 0, at_fix = 0;
+  for (const Fix& f : fixes_) {
+    if (f.utime < from || f.matches_at_fix < 0) continue;
+    at_origin += f.matches_at_origin;
+    at_fix += f.matches_at_fix;
+    ++n;
+  }
+  return n >= 2 && at_origin >= min_matches_ * n / 2 && 2 * at_origin >= at_fix;
+}
+
 bool MotionInitializer::atRestSince(Utime from, double tolerance_m, bool& known) const {
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   int n = 0;
@@ -392,7 +441,7 @@ bool MotionInitializer::atRestSince(Utime from, double tolerance_m, bool& known)
     ++n;
   }
   known = n >= 2;
-  return known && (hi - lo).norm() <= tolerance_m;
+  return known && ((hi - lo).norm() <= tolerance_m || fixesFailedAtRest(from));
 }
 
 std::string MotionInitializer::describe() const {

@@ -72,7 +72,9 @@ class MotionInitializer {
   /// points() are the last frame's points (IMU frame at its time).
   void takeOver(NavState& x, StateCov& P);
   /// Whether the LiDAR saw the rig at rest since `from`: the fixes since then stay within
-  /// `tolerance_m` of each other. `known` is false with fewer than two fixes there.
+  /// `tolerance_m` of each other, or, when the fixes do not fit one motion (failed registrations, e.g.
+  /// on a first map of planes one scan line wide), the scans since then match the first scan at its
+  /// position at least half as well as at their fixes. `known` is false with fewer than two fixes there.
   bool atRestSince(Utime from, double tolerance_m, bool& known) const;
   double accelScale() const { return accel_scale_; }
   std::vector<BodyPoint>& points() { return points_; }
@@ -94,6 +96,10 @@ class MotionInitializer {
     Utime utime;
     Mat3 R;  ///< registered rotation (first IMU frame = world)
     Vec3 p;
+    /// The scan's points (undistorted at rest) that find a plane of the first scan alone at the
+    /// first scan's position (rotation R) and at p: the rest test's evidence when the fixes do not fit
+    /// one motion (atRestSince). -1 when not counted.
+    int matches_at_origin = -1, matches_at_fix = -1;
   };
   struct Solution {
     Vec3 v0 = Vec3::Zero(), g = Vec3::Zero();
@@ -109,6 +115,12 @@ class MotionInitializer {
   Vec3 searchPosition(const Mat3& R_pred, const Vec3& p_pred, double dt) const;
 
   void insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p);
+  /// Points of `pts` (IMU frame) that find a plane of first_map_ at pose (R, p), gated by their own
+  /// noise and the planes' (no pose uncertainty).
+  int firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) const;
+  /// The fixes since `from` (at least two) fail to fit one motion, and the scans match the first scan at
+  /// its position about as well as at their fixes: the registrations, not the rig, moved.
+  bool fixesFailedAtRest(Utime from) const;
   /// The map from the first scan undistorted along v_cv_; `final`: the first scan is then dropped.
   void rebuildMap(bool final);
   /// The latest fix at least 50 ms before t (nullptr if none).
@@ -124,6 +136,7 @@ class MotionInitializer {
   int min_matches_;
   PreparePoints prepare_;
   std::unique_ptr<VoxelMap> map_;
+  std::unique_ptr<VoxelMap> first_map_;  ///< the first scan alone, at rest (the rest test's reference)
   OccupancyPyramid occupancy_;     ///< of map_'s points while the first fixes are searched
   double accel_scale_ = 1.0;
   bool started_ = false, solved_ = false, rebuilt_ = false;
