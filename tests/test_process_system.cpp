@@ -3,7 +3,7 @@
 // not root or without `ip netns`), their command-line errors, and procman/run-local (starts a group of
 // a .pmd, restarts a killed command, stops everything on SIGTERM; resolves livo.pmd's commands), and the
 // command line every process shares (--help, --version, exit codes, --print-config).
-// livo-test-bins: livo-preprocess livo-exporter livo-estimator livo-mapserver
+// livo-test-bins: livo-preprocess livo-exporter livo-estimator livo-mapserver livo-sim
 #include "livo/cli/command_line.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/io/convert.hpp"
@@ -12,6 +12,7 @@
 #include "process_test_files.hpp"
 #include "process_test_streams.hpp"
 #include "process_test_children.hpp"
+#include "process_test_suite.hpp"
 
 #include <octomap/OcTree.h>
 #include <pcl/io/pcd_io.h>
@@ -278,6 +279,57 @@ TEST(ProcessNetns, PreprocessDrainsOnSigint) {
   // Every message sent was received and every frame published: the same 21 frames as with --idle-exit.
   EXPECT_NE(out.find("frames published 21 (20 with image"), std::string::npos) << out;
   EXPECT_EQ(completeEvents(dir + "/out.lcm"), 21u);
+}
+
+/// The first number after `key` in `text` (-1 when absent).
+long numberAfter(const std::string& text, const std::string& key) {
+  const auto i = text.find(key);
+  return i == std::string::npos ? -1 : std::strtol(text.c_str() + i + key.size(), nullptr, 10);
+}
+
+// Drain on stop: the estimator is stopped the moment the preprocessor (itself drained on SIGINT) has
+// published its frames of 3 s of the demo, most of them in one burst at its stop: every frame the
+// estimator received is processed with the map server's answers, and its odometry published, before it
+// exits.
+TEST(ProcessNetns, EstimatorDrainsOnSigint) {
+  Netns ns;
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
+  const std::string dir = tempDir("estimator_drain");
+  const test::SimulatedDemo demo(dir, 3.0);
+  ASSERT_TRUE(demo.ok) << demo.error;
+  Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_ODOMETRY", dir + "/odom.lcm"}),
+               dir + "/logger.txt");
+  Child map(ns.exec({kBin + "/livo-mapserver", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/map.txt");
+  Child est(ns.exec({kBin + "/livo-estimator", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/estimator.txt");
+  Child pre(ns.exec({kBin + "/livo-preprocess", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/preprocess.txt");
+  ASSERT_TRUE(saysWithin(dir + "/logger.txt", "Opening log file", 60)) << readFile(dir + "/logger.txt");
+  for (const char* name : {"map", "estimator", "preprocess"})
+    ASSERT_TRUE(saysWithin(dir + "/" + name + ".txt", " on " + kUrl, 60)) << readFile(dir + "/" + name + ".txt");
+  Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=4", demo.log}), dir + "/player.txt");
+  EXPECT_EQ(player.wait(60), 0) << readFile(dir + "/player.txt");
+  pre.signal(SIGINT);
+  EXPECT_EQ(pre.wait(60), 0) << readFile(dir + "/preprocess.txt");
+  est.signal(SIGINT);
+  EXPECT_EQ(est.wait(60), 0) << readFile(dir + "/estimator.txt");
+  const std::string out = readFile(dir + "/estimator.txt");
+  const long published = numberAfter(readFile(dir + "/preprocess.txt"), "frames published ");
+  const long odometry = numberAfter(out, "), odometry ");
+  ASSERT_GE(published, 25) << readFile(dir + "/preprocess.txt");  // 3 s at 10 Hz
+  std::cout << "estimator drain: " << published << " frames published, estimator: "
+            << out.substr(out.rfind("frames "), out.find('\n', out.rfind("frames ")) - out.rfind("frames ")) << "\n";
+  waitUntil([&] { return long(completeEvents(dir + "/odom.lcm")) >= odometry; }, 5);
+  logger.signal(SIGINT);
+  logger.wait(30);
+  map.signal(SIGINT);
+  EXPECT_EQ(map.wait(60), 0) << readFile(dir + "/map.txt");
+  EXPECT_NE(out.find("Interrupt"), std::string::npos) << out;
+  // Every frame published was processed, none dropped from the queue; one odometry message per frame
+  // once initialised (the demo stands still for its first second), each of them on the bus.
+  EXPECT_EQ(numberAfter(out, "\nframes "), published) << out;
+  EXPECT_EQ(numberAfter(out, "dropped from the queue "), 0) << out;
+  EXPECT_GE(odometry, published - 12) << out;
+  EXPECT_EQ(long(completeEvents(dir + "/odom.lcm")), odometry);
 }
 
 // Drain on stop: SIGINT as soon as the player is done; the exporter writes all 20 frames.
