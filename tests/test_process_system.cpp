@@ -281,17 +281,18 @@ TEST(ProcessNetns, PreprocessDrainsOnSigint) {
   EXPECT_EQ(completeEvents(dir + "/out.lcm"), 21u);
 }
 
-/// The first number after `key` in `text` (-1 when absent).
+/// The number after the last `key` in `text` (the summary comes last; -1 when absent).
 long numberAfter(const std::string& text, const std::string& key) {
-  const auto i = text.find(key);
+  const auto i = text.rfind(key);
   return i == std::string::npos ? -1 : std::strtol(text.c_str() + i + key.size(), nullptr, 10);
 }
 
-// Drain on stop: the estimator is stopped the moment the preprocessor (itself drained on SIGINT) has
-// published its frames of 3 s of the demo, most of them in one burst at its stop: every frame the
-// estimator received is processed with the map server's answers, and its odometry published, before it
-// exits.
-TEST(ProcessNetns, EstimatorDrainsOnSigint) {
+// Drain on stop, estimator and map server: the estimator is stopped the moment the preprocessor (itself
+// drained on SIGINT) has published its frames of 3 s of the demo, most of them in one burst at its stop:
+// every frame the estimator received is processed with the map server's answers, and its odometry
+// published, before it exits. Then the estimator's map updates, replayed at 16x into a new map server
+// stopped the moment the player is done: every update is applied before the map file is saved.
+TEST(ProcessNetns, EstimatorAndMapServerDrainOnSigint) {
   Netns ns;
   if (!ns.ok) LIVO_SKIP() << ns.why;
   if (!haveTool("lcm-logplayer") || !haveTool("lcm-logger")) LIVO_SKIP() << "lcm-logplayer / lcm-logger missing";
@@ -300,10 +301,13 @@ TEST(ProcessNetns, EstimatorDrainsOnSigint) {
   ASSERT_TRUE(demo.ok) << demo.error;
   Child logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_ODOMETRY", dir + "/odom.lcm"}),
                dir + "/logger.txt");
+  Child update_logger(ns.exec({"lcm-logger", "-f", "--lcm-url=" + kUrl, "-c", "LIVO_MAP_UPDATE", dir + "/updates.lcm"}),
+                      dir + "/update_logger.txt");
   Child map(ns.exec({kBin + "/livo-mapserver", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/map.txt");
   Child est(ns.exec({kBin + "/livo-estimator", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/estimator.txt");
   Child pre(ns.exec({kBin + "/livo-preprocess", "--config", demo.rig, "--lcm-url", kUrl}), dir + "/preprocess.txt");
-  ASSERT_TRUE(saysWithin(dir + "/logger.txt", "Opening log file", 60)) << readFile(dir + "/logger.txt");
+  for (const char* name : {"logger", "update_logger"})
+    ASSERT_TRUE(saysWithin(dir + "/" + name + ".txt", "Opening log file", 60)) << readFile(dir + "/" + name + ".txt");
   for (const char* name : {"map", "estimator", "preprocess"})
     ASSERT_TRUE(saysWithin(dir + "/" + name + ".txt", " on " + kUrl, 60)) << readFile(dir + "/" + name + ".txt");
   Child player(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=4", demo.log}), dir + "/player.txt");
@@ -321,6 +325,8 @@ TEST(ProcessNetns, EstimatorDrainsOnSigint) {
   waitUntil([&] { return long(completeEvents(dir + "/odom.lcm")) >= odometry; }, 5);
   logger.signal(SIGINT);
   logger.wait(30);
+  update_logger.signal(SIGINT);
+  update_logger.wait(30);
   map.signal(SIGINT);
   EXPECT_EQ(map.wait(60), 0) << readFile(dir + "/map.txt");
   EXPECT_NE(out.find("Interrupt"), std::string::npos) << out;
@@ -330,6 +336,21 @@ TEST(ProcessNetns, EstimatorDrainsOnSigint) {
   EXPECT_EQ(numberAfter(out, "dropped from the queue "), 0) << out;
   EXPECT_GE(odometry, published - 12) << out;
   EXPECT_EQ(long(completeEvents(dir + "/odom.lcm")), odometry);
+
+  const long updates = long(completeEvents(dir + "/updates.lcm"));
+  ASSERT_GE(updates, odometry) << "one map update per registered frame";
+  Child map2(ns.exec({kBin + "/livo-mapserver", "--config", demo.rig, "--lcm-url", kUrl, "--map-file", dir + "/map.bin"}),
+             dir + "/map2.txt");
+  ASSERT_TRUE(saysWithin(dir + "/map2.txt", " on " + kUrl, 60)) << readFile(dir + "/map2.txt");
+  Child player2(ns.exec({"lcm-logplayer", "--lcm-url=" + kUrl, "--speed=16", dir + "/updates.lcm"}), dir + "/player2.txt");
+  EXPECT_EQ(player2.wait(60), 0) << readFile(dir + "/player2.txt");
+  map2.signal(SIGINT);
+  EXPECT_EQ(map2.wait(60), 0) << readFile(dir + "/map2.txt");
+  const std::string map_out = readFile(dir + "/map2.txt");
+  std::cout << "map server drain: " << updates << " updates replayed, map server: updates "
+            << numberAfter(map_out, "), updates ") << "\n";
+  EXPECT_EQ(numberAfter(map_out, "), updates "), updates) << map_out;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/map.bin")) << map_out;
 }
 
 // Drain on stop: SIGINT as soon as the player is done; the exporter writes all 20 frames.
