@@ -17,6 +17,7 @@ void PipelineConfig::load(const ConfigNode& root) {
   camera.load(root);
   selector.load(root);
   vio.load(root);
+  vio.takeCamera(camera);
   visual_map.load(root.section("vio"));
   map.load(root.section("map"));
 }

@@ -8,14 +8,6 @@
 namespace livo {
 
 void VioConfig::load(const ConfigNode& root) {
-  if (root.has("camera")) {
-    const ConfigNode c = root.section("camera");
-    c.get("pixel_noise", pixel_noise).get("estimate_time_offset", estimate_time_offset);
-    c.get("time_offset_sigma_s", time_offset_sigma_s).get("rate_hz", camera_rate_hz);
-    c.check(camera_rate_hz > 0 && camera_rate_hz <= 1000, "rate_hz", "must be in (0, 1000] (the nominal image rate)");
-    c.check(std::isfinite(time_offset_sigma_s) && time_offset_sigma_s > 0 && time_offset_sigma_s <= 0.5 / camera_rate_hz,
-            "time_offset_sigma_s", "must be > 0 and at most half the image interval (0.5 / camera.rate_hz s)");
-  }
   const ConfigNode n = root.section("vio");
   n.get("max_iterations", max_iterations).get("outlier_rms", outlier_rms);
   n.get("estimate_exposure", estimate_exposure).get("normal_warp", normal_warp);
@@ -23,7 +15,13 @@ void VioConfig::load(const ConfigNode& root) {
   n.check(model_noise >= 0, "model_noise", "must be >= 0");
   n.check(max_iterations >= 1 && max_iterations <= 50, "max_iterations", "must be in 1..50");
   n.check(outlier_rms > 0, "outlier_rms", "must be > 0");
-  n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
+}
+
+void VioConfig::takeCamera(const CameraConfig& camera) {
+  pixel_noise = camera.pixel_noise;
+  estimate_time_offset = camera.estimate_time_offset;
+  time_offset_sigma_s = camera.time_offset_sigma_s;
+  camera_rate_hz = camera.rate_hz;
 }
 
 namespace {

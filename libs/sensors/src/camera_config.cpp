@@ -1,5 +1,7 @@
 #include "livo/sensors/camera_config.hpp"
 
+#include <cmath>
+
 namespace livo {
 
 void CameraConfig::load(const ConfigNode& root) {
@@ -12,6 +14,12 @@ void CameraConfig::load(const ConfigNode& root) {
   n.get("enabled", enabled);
   n.get("model", model).get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
   n.get("vignetting", vignetting);
+  n.get("rate_hz", rate_hz).get("estimate_time_offset", estimate_time_offset);
+  n.get("time_offset_sigma_s", time_offset_sigma_s);
+  n.check(rate_hz > 0 && rate_hz <= 1000, "rate_hz", "must be in (0, 1000] (the nominal image rate)");
+  n.check(std::isfinite(time_offset_sigma_s) && time_offset_sigma_s > 0 && time_offset_sigma_s <= 0.5 / rate_hz,
+          "time_offset_sigma_s", "must be > 0 and at most half the image interval (0.5 / camera.rate_hz s)");
+  n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
   if (!enabled) {
     // A disabled camera may still carry its calibration: read it without requiring it.
     n.get("width", width).get("height", height).get("fx", fx).get("fy", fy).get("cx", cx).get("cy", cy);
@@ -28,7 +36,6 @@ void CameraConfig::load(const ConfigNode& root) {
   n.check(fy > 0, "fy", "must be > 0");
   n.check(distortion.empty() || distortion.size() == 4, "distortion", "needs 4 coefficients (or none)");
   n.check(scale > 0 && scale <= 1.0, "scale", "must be in (0, 1]");
-  n.check(pixel_noise > 0, "pixel_noise", "must be > 0");
   n.check(vignetting >= 0 && vignetting < 1, "vignetting", "must be in [0, 1) (the fall-off 1 - k r^2 at the corner)");
 }
 

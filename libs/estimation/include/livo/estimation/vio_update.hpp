@@ -33,9 +33,11 @@ struct VioConfig {
   double time_offset_sigma_s = 0.005;
   double camera_rate_hz = 10.0;    ///< camera.rate_hz: nominal image rate (the offset's bounds)
 
-  /// Reads the `vio` section (and pixel_noise, estimate_time_offset, time_offset_sigma_s, rate_hz from
-  /// `camera`).
+  /// Reads the `vio` section.
   void load(const ConfigNode& root);
+  /// The camera's keys the update uses (pixel_noise, estimate_time_offset, time_offset_sigma_s, rate_hz:
+  /// read and checked once, by CameraConfig).
+  void takeCamera(const CameraConfig& camera);
   /// Residual variance used by the update, gray levels^2.
   double residualVariance() const { return pixel_noise * pixel_noise + model_noise * model_noise; }
 };

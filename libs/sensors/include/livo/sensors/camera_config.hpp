@@ -19,6 +19,11 @@ struct CameraConfig {
   Pose T_imu_camera = Pose::Identity();  ///< camera pose in the IMU frame (required when enabled)
   double pixel_noise = 3.0;      ///< photometric noise sigma, gray levels
   double vignetting = 0.0;       ///< k of the fall-off 1 - k r^2, divided out of every image (vignetting.hpp)
+  double rate_hz = 10.0;         ///< nominal image rate (the time offset's bounds; the selector's)
+  /// Online camera-IMU time offset in the photometric update, prior sigma time_offset_sigma_s (below half
+  /// the image interval).
+  bool estimate_time_offset = false;
+  double time_offset_sigma_s = 0.005;
 
   /// Reads the `camera` section of a rig config; keys owned by the preprocessing (time_offset_s) are
   /// read there. Throws ConfigError naming the key when a required one is missing or invalid.
