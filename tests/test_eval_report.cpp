@@ -214,3 +214,52 @@ TEST(LivoReport, MapPicturesShowTheRoomFromAboveWithoutItsCeiling) {
   EXPECT_NE(out.find("map.pcd: truncated"), std::string::npos) << out;
   fs::remove_all(dir);
 }
+
+// The health timeline: a run whose frames.csv states are 10 frames initialising, 50 ok, 10 with the
+// LiDAR failed and an image used, 20 on the IMU alone and 10 ok again (0.1 s each): every state is drawn
+// in its colour, each over a length of the time axis proportional to its frames, and the summary
+// quotes stats.json's health figures.
+TEST(LivoReport, HealthTimelineDrawsEveryStateInProportion) {
+  if (!haveMatplotlib()) LIVO_SKIP() << "python3-matplotlib missing";
+  const fs::path dir = fs::temp_directory_path() / ("livo_report_health_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "run");
+  std::ofstream csv(dir / "run" / "frames.csv");
+  csv << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
+         "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state\n";
+  std::ofstream tum(dir / "run" / "trajectory.tum");
+  for (int i = 0; i < 100; ++i) {
+    const double t = 50.0 + 0.1 * i;
+    const char* state = i < 10 ? "initialising" : i < 60 ? "ok" : i < 70 ? "lidar_failed" : i < 90 ? "imu_only" : "ok";
+    const bool visual = i >= 60 && i < 70;
+    csv << t << ",5,0,6,0.3,0," << visual << ",1000,900,0,0,0,nan,nan," << state << "\n";
+    if (i >= 10) tum << t << " " << 0.1 * i << " 0 0 0 0 0 1\n";
+  }
+  csv.close();
+  tum.close();
+  std::ofstream(dir / "run" / "stats.json")
+      << R"({"frames": 100, "visual_mode": "adaptive", "map_mode": "hybrid",
+            "health": {"first_pose_delay_s": 1, "initialising_s": 1, "lidar_failed_s": 3, "imu_only_s": 2,
+                       "degenerate_s": 0, "longest_pose_gap_s": 0.1}})";
+  std::string out;
+  ASSERT_EQ(run(kReport + " " + (dir / "run").string(), out, dir.string()), 0) << out;
+  const std::string md = slurp((dir / "run" / "report" / "README.md").string());
+  EXPECT_NE(md.find("| health | first pose 1.00 s after the first frame; initialising 1.0 s, LiDAR failed 3.0 s, "
+                    "IMU only 2.0 s, degenerate 0.0 s; longest pose gap 0.10 s |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("![health](health.png)"), std::string::npos) << md;
+  const cv::Mat img = cv::imread((dir / "run" / "report" / "health.png").string(), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  // The bars' colours (scripts/livo-report STATES); the legend adds the same small swatch to each.
+  const double init = double(countColour(img, 0x9e, 0x9e, 0x9e)), ok = double(countColour(img, 0x55, 0xa8, 0x68));
+  const double failed = double(countColour(img, 0xdd, 0x84, 0x52)), imu = double(countColour(img, 0xc4, 0x4e, 0x52));
+  ASSERT_GT(init, 0.0);
+  ASSERT_GT(failed, 0.0);
+  std::cout << "health.png pixels: initialising " << init << ", ok " << ok << ", lidar failed " << failed
+            << ", imu only " << imu << "\n";
+  // Each count is a bar's length times its height plus the legend's swatch (the same for every state):
+  // differences cancel the swatch.
+  EXPECT_NEAR((ok - init) / (imu - init), 5.0, 0.5) << "60 frames ok, 20 on the IMU alone, 10 initialising";
+  EXPECT_NEAR(failed / init, 1.0, 0.1) << "10 frames each";
+  fs::remove_all(dir);
+}

@@ -286,13 +286,13 @@ TEST(EstimatorMessages, RoundTripOdometryRegisteredScanStats) {
 
   EstimatorStats s;
   s.utime = 5; s.frame_index = 6; s.lio_ms = 7.5f; s.vio_ms = 2.25f; s.map_ms = 0.5f; s.map_wait_ms = 3.25f; s.total_ms = 11.f;
-  s.sigma_min = 0.125f; s.degenerate = true; s.visual_used = false; s.map_timeout = true;
+  s.sigma_min = 0.125f; s.degenerate = true; s.visual_used = false; s.map_timeout = true; s.lidar_failed = true;
   s.n_points = 1000; s.n_planes_matched = 900; s.n_visual_points = 80; s.n_longterm_visual_points = 30;
   s.dropped_points = 12;
   const EstimatorStats b = roundTrip<livo::estimator_stats_t>(s);
   EXPECT_EQ(b.utime, 5); EXPECT_EQ(b.frame_index, 6); EXPECT_EQ(b.lio_ms, 7.5f); EXPECT_EQ(b.vio_ms, 2.25f);
   EXPECT_EQ(b.map_ms, 0.5f); EXPECT_EQ(b.map_wait_ms, 3.25f); EXPECT_EQ(b.total_ms, 11.f); EXPECT_EQ(b.sigma_min, 0.125f);
-  EXPECT_TRUE(b.degenerate); EXPECT_FALSE(b.visual_used); EXPECT_TRUE(b.map_timeout);
+  EXPECT_TRUE(b.degenerate); EXPECT_FALSE(b.visual_used); EXPECT_TRUE(b.map_timeout); EXPECT_TRUE(b.lidar_failed);
   EXPECT_EQ(b.n_points, 1000); EXPECT_EQ(b.n_planes_matched, 900); EXPECT_EQ(b.n_visual_points, 80);
   EXPECT_EQ(b.n_longterm_visual_points, 30);
   EXPECT_EQ(b.dropped_points, 12);

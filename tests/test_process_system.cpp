@@ -394,6 +394,15 @@ TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   EXPECT_EQ(readTum(dir + "/out/trajectory.tum").size(), 19u);
   EXPECT_EQ(countLines(dir + "/out/frames.csv"), 21u);
   EXPECT_NE(readFile(dir + "/out/stats.json").find("\"frames\": 20"), std::string::npos);
+  // The same health section and frame states as livo-run's (19 poses after one initialising frame).
+  const std::string stats = readFile(dir + "/out/stats.json");
+  EXPECT_NE(stats.find("\"health\": {\"first_pose_delay_s\""), std::string::npos) << stats;
+  const std::string csv = readFile(dir + "/out/frames.csv");
+  std::size_t n_init = 0, n_ok = 0;
+  for (std::size_t at = 0; (at = csv.find(",initialising\n", at)) != std::string::npos; ++at) ++n_init;
+  for (std::size_t at = 0; (at = csv.find(",ok\n", at)) != std::string::npos; ++at) ++n_ok;
+  EXPECT_EQ(n_init, 1u) << csv;
+  EXPECT_EQ(n_ok, 19u) << csv;
   pcl::PointCloud<pcl::PointXYZRGB> cloud;
   ASSERT_EQ(pcl::io::loadPCDFile(dir + "/out/map.pcd", cloud), 0);
   EXPECT_GT(cloud.size(), 400u);

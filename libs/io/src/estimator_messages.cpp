@@ -185,6 +185,7 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.degenerate = s.degenerate;
   m.visual_used = s.visual_used;
   m.map_timeout = s.map_timeout;
+  m.lidar_failed = s.lidar_failed;
   m.n_points = s.n_points;
   m.n_planes_matched = s.n_planes_matched;
   m.n_visual_points = s.n_visual_points;
@@ -213,6 +214,7 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.degenerate = m.degenerate != 0;
   out.visual_used = m.visual_used != 0;
   out.map_timeout = m.map_timeout != 0;
+  out.lidar_failed = m.lidar_failed != 0;
   out.n_points = m.n_points;
   out.n_planes_matched = m.n_planes_matched;
   out.n_visual_points = m.n_visual_points;

@@ -17,6 +17,7 @@ EstimatorStats frameStats(const FrameResult& f, Utime utime, std::int64_t frame_
   st.degenerate = f.degenerate;
   st.visual_used = f.visual_used;
   st.map_timeout = f.link.map_timeout;
+  st.lidar_failed = f.lidarFailed();
   st.n_points = f.lio.n_points;
   st.n_planes_matched = f.lio.n_matched;
   st.n_visual_points = f.n_visual_points;
@@ -37,6 +38,7 @@ void applyStats(FrameRecord& rec, const EstimatorStats& s) {
   rec.sigma_min = s.sigma_min;
   rec.degenerate = s.degenerate;
   rec.visual_used = s.visual_used;
+  rec.lidar_failed = s.lidar_failed;
   rec.n_points = s.n_points;
   rec.n_planes_matched = s.n_planes_matched;
   rec.n_visual_points = s.n_visual_points;

@@ -51,11 +51,17 @@ void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bo
 
 }  // namespace
 
+const char* frameState(const FrameRecord& f) {
+  if (!f.has_pose) return "initialising";
+  if (f.lidar_failed) return f.visual_used ? "lidar_failed" : "imu_only";
+  return "ok";
+}
+
 RunOutputs::RunOutputs(const std::string& dir)
     : dir_(ensureDir(dir)), tum_(dir + "/trajectory.tum"), csv_(dir + "/frames.csv") {
   if (!csv_) throw std::runtime_error(dir + "/frames.csv: cannot open for writing");
   csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,map_bytes,"
-          "n_longterm_points,time_offset_s,time_offset_sigma_s\n";
+          "n_longterm_points,time_offset_s,time_offset_sigma_s,state\n";
   csv_.flush();
 }
 
@@ -67,9 +73,10 @@ void RunOutputs::addFrame(const FrameRecord& f) {
        << ',' << int(f.visual_used) << ',' << f.n_points << ',' << f.n_planes_matched << ',' << f.n_visual_points
        << ',' << f.map_bytes << ',' << f.n_longterm_visual_points << ',';
   if (f.has_time_offset)
-    csv_ << std::setprecision(7) << f.time_offset_s << ',' << f.time_offset_sigma_s << '\n';
+    csv_ << std::setprecision(7) << f.time_offset_s << ',' << f.time_offset_sigma_s;
   else
-    csv_ << "nan,nan\n";
+    csv_ << "nan,nan";
+  csv_ << ',' << frameState(f) << '\n';
   csv_.flush();
   if (!csv_) throw std::runtime_error(dir_ + "/frames.csv: write failed");
 }

@@ -80,6 +80,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
     counters_["frames_without_stats"] += 1;
   }
   outputs_.addFrame(rec);  // flushed per line
+  health_.addFrame(t, rec.has_pose, rec.lidar_failed, rec.visual_used, rec.degenerate);
   wrote_any_ = true;
   last_written_ = t;
 }
@@ -174,7 +175,7 @@ void ExporterNode::finish() {
     counters_["octomap_scans"] = double(occupancy_.scansInserted());
     counters_["octomap_scans_dropped"] = double(occupancy_.scansDropped());
   }
-  outputs_.writeStats(ms, bytesToMb(peakRssBytes()), counters_, notes);
+  outputs_.writeStats(ms, bytesToMb(peakRssBytes()), counters_, notes, &health_);
 }
 
 std::string ExporterNode::progressLine() const {

@@ -59,6 +59,7 @@ struct EstimatorStats {
   bool degenerate = false;
   bool visual_used = false;
   bool map_timeout = false;
+  bool lidar_failed = false;  ///< the LiDAR update failed on a map that should have matched
   std::int32_t n_points = 0;          ///< downsampled points used
   std::int32_t n_planes_matched = 0;
   std::int32_t n_visual_points = 0;   ///< visual points used in the update

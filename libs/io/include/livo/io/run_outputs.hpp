@@ -41,6 +41,7 @@ struct FrameRecord {
   double sigma_min = 0;
   bool degenerate = false;
   bool visual_used = false;
+  bool lidar_failed = false;  ///< the LiDAR update failed on a map that should have matched
   int n_points = 0;
   int n_planes_matched = 0;
   int n_visual_points = 0;
@@ -53,6 +54,11 @@ struct FrameRecord {
   /// frames carried forward (processes/livo-run/main.cpp).
   std::uint64_t map_bytes = 0;
 };
+
+/// The frame's state in frames.csv's `state` column, as RunHealth counts it: initialising (no pose yet),
+/// imu_only (the LiDAR update failed and no image was used), lidar_failed (it failed, an image was used),
+/// ok. (Degenerate frames are their own column.)
+const char* frameState(const FrameRecord& f);
 
 /// What a run did over time (stats.json section "health"), from its frames in order: the delay from
 /// the first frame to the first pose, the time spent initialising (frames without a pose before the

@@ -77,6 +77,7 @@ class ExporterNode {
   MapExportConfig cfg_;
   std::ostream* log_;
   RunOutputs outputs_;
+  RunHealth health_;  ///< stats.json "health", from the frames written
   MapCloud cloud_;
   OccupancyMap occupancy_;
 
