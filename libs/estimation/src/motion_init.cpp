@@ -246,7 +246,7 @@ bool MotionInitializer::process(const Frame& frame) {
     // The rest test's evidence: the scan undistorted at rest (gyro rotation, no translation) against
     // the first scan alone, at the first scan's position and at the fix.
     const std::vector<BodyPoint> at_rest = prepare_(frame.sweep, rest_trace);
-    fix.matches_at_origin = firstMapMatches(at_rest, R, Vec3::Zero());
+    fix.matches_at_origin = firstMapMatches(at_rest, R, Vec3::Zero(), p, &fix.shift_on_normals_m);
     fix.matches_at_fix = firstMapMatches(at_rest, R, p);
   }
   if (const Fix* base = fixBefore(frame.utime)) v_cv_ = (p - base->p) / toSeconds(frame.utime - base->utime);
@@ -404,26 +404,36 @@ void MotionInitializer::takeOver(NavState& x, StateCov& P) {
   map_.reset();
 }
 
-int MotionInitializer::firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) const {
+int MotionInitializer::firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p,
+                                       const Vec3& shift, double* shift_rms_m) const {
   NavState x;
   x.R_world_imu = R;
   x.p_world_imu = p;
   const WorldPointCovariance point_cov(x, StateCov::Zero());
   int n = 0;
+  double shift_sq = 0.0;
   for (const auto& bp : pts) {
     const Vec3 q = R * bp.p_imu;
     PlaneMatch m;
-    if (first_map_->findBestPlane({q + p, point_cov(bp, q)}, m)) ++n;
+    if (!first_map_->findBestPlane({q + p, point_cov(bp, q)}, m)) continue;
+    ++n;
+    const double along = m.plane->normal.dot(shift);
+    shift_sq += along * along;
   }
+  if (shift_rms_m) *shift_rms_m = n > 0 ? std::sqrt(shift_sq / n) : 0.0;
   return n;
 }
 
 bool MotionInitializer::fixesFailedAtRest(Utime from) const {
   if (!check_.done || !(check_.rms > 3.0 * fixSigma(lio_))) return false;  // the fixes fit one motion
   // Summed over the fixes: a frame cut milliseconds after the last (at an image) holds few points.
+  // Only fixes whose offset from the first scan's position the first scan's planes resolve (the offset
+  // projected on the normals of the planes matched there, RMS, beyond the fixes' 3-sigma): a rig that
+  // slides along a wall matches it as well at the origin as at its fix, which is no evidence of rest.
+  const double resolvable_m = 3.0 * fixSigma(lio_);
   int n = 0, at_origin = 0, at_fix = 0;
   for (const Fix& f : fixes_) {
-    if (f.utime < from || f.matches_at_fix < 0) continue;
+    if (f.utime < from || f.matches_at_fix < 0 || !(f.shift_on_normals_m > resolvable_m)) continue;
     at_origin += f.matches_at_origin;
     at_fix += f.matches_at_fix;
     ++n;

@@ -74,7 +74,8 @@ class MotionInitializer {
   /// Whether the LiDAR saw the rig at rest since `from`: the fixes since then stay within
   /// `tolerance_m` of each other, or, when the fixes do not fit one motion (failed registrations, e.g.
   /// on a first map of planes one scan line wide), the scans since then match the first scan at its
-  /// position at least half as well as at their fixes. `known` is false with fewer than two fixes there.
+  /// position at least half as well as at their fixes, counted over the fixes whose offset from that
+  /// position the first scan's planes resolve. `known` is false with fewer than two fixes there.
   bool atRestSince(Utime from, double tolerance_m, bool& known) const;
   double accelScale() const { return accel_scale_; }
   std::vector<BodyPoint>& points() { return points_; }
@@ -100,6 +101,9 @@ class MotionInitializer {
     /// first scan's position (rotation R) and at p: the rest test's evidence when the fixes do not fit
     /// one motion (atRestSince). -1 when not counted.
     int matches_at_origin = -1, matches_at_fix = -1;
+    /// RMS over the points matched at the origin of the fix's offset p projected on their planes'
+    /// normals, m: how well the first scan tells the origin from the fix.
+    double shift_on_normals_m = 0.0;
   };
   struct Solution {
     Vec3 v0 = Vec3::Zero(), g = Vec3::Zero();
@@ -117,7 +121,9 @@ class MotionInitializer {
   void insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p);
   /// Points of `pts` (IMU frame) that find a plane of first_map_ at pose (R, p), gated by their own
   /// noise and the planes' (no pose uncertainty).
-  int firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) const;
+  /// With `shift_rms_m`: the RMS over the matched points of `shift` projected on their planes' normals.
+  int firstMapMatches(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p, const Vec3& shift = Vec3::Zero(),
+                      double* shift_rms_m = nullptr) const;
   /// The fixes since `from` (at least two) fail to fit one motion, and the scans match the first scan at
   /// its position about as well as at their fixes: the registrations, not the rig, moved.
   bool fixesFailedAtRest(Utime from) const;
