@@ -5,6 +5,7 @@
 // channel is listed with a decoded type, among them the large LIVO_LIDAR (~530 kB), LIVO_FRAME and
 // LIVO_SUBMAP. Skipped without root (namespace), Xvfb, java or the jars, which CI provides.
 // livo-test-bins: livo-sim livo-preprocess livo-estimator livo-mapserver livo-exporter livo_lcmtypes_jar livo_spy_jar
+// livo-test-xserver: starts Xvfb (its tests run one at a time with the others that do)
 #include "process_test_display.hpp"
 #include "process_test_suite.hpp"
 #include "test_skip.hpp"

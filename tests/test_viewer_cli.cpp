@@ -5,6 +5,7 @@
 // where its sidecar's camera matrix projects it (no estimator involved: an exact oracle).
 // livo-test-bins: livo-viewer
 // livo-test-deps: livo_eval opencv_core opencv_imgcodecs
+// livo-test-xserver: starts Xvfb (its tests run one at a time with the others that do)
 #include "viewer_test_util.hpp"
 #include "livo/eval/tum.hpp"
 #include "livo/viewer/colour.hpp"

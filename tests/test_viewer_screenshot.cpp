@@ -8,6 +8,7 @@
 // Skipped without root (namespace), Xvfb or lcm-logplayer, which CI provides (CI=true: a skip fails).
 // livo-test-bins: livo-sim livo-preprocess livo-estimator livo-mapserver livo-exporter livo-viewer
 // livo-test-deps: livo_eval opencv_core opencv_imgcodecs
+// livo-test-xserver: starts Xvfb (its tests run one at a time with the others that do)
 #include "viewer_test_util.hpp"
 #include "livo/eval/align.hpp"
 #include "livo/eval/tum.hpp"
