@@ -14,6 +14,7 @@
 #include "livo/process/mapserver_node.hpp"
 #include "livo/process/stop_signal.hpp"
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -70,7 +71,11 @@ int main(int argc, char** argv) {
     }
     const std::string url = resolveLcmUrl(args.lcm_url);
     LcmNode lcm(url, "livo-mapserver", &std::cerr);
-    MapServerNode node(lcm, service, channels, &std::cerr);
+    // IMU samples kept after the estimator's last filter state, for a restarted estimator: 30 s at
+    // imu.rate_hz (within the message limit of a resume answer).
+    const auto max_resume_imu = std::size_t(std::clamp(30.0 * pipe_cfg.lio.imu.rate_hz, 100.0,
+                                                        double(lcm.limits().max_imu_per_frame)));
+    MapServerNode node(lcm, service, channels, &std::cerr, 1.0, max_resume_imu);
     std::cerr << "livo-mapserver: " << map_mode << " map";
     if (service.map().stats().cap_bytes > 0) std::cerr << ", cap " << service.map().stats().cap_bytes / (1 << 20) << " MiB";
     std::cerr << "; " << channels.map_query << " -> " << channels.submap << ", " << channels.map_update << " on " << url

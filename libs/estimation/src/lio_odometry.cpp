@@ -55,7 +55,8 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
   // From motion, once the static search has given up (a static window observes the gyro bias).
   if (motion_converged && init_.noStaticWindow()) {
     motion_->takeOver(x_, P_);
-    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, motion_->accelScale());
+    accel_scale_ = motion_->accelScale();
+    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
     std::ostringstream os;
     os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
        << "; " << motion_->describe();
@@ -89,13 +90,34 @@ bool LioOdometry::initCoarse(const Frame& frame) {
   const double sv = std::max(2.0, 0.5 * v_body.norm());
   P_.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
   x_ = x;
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale);
+  accel_scale_ = accel_scale;
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
   motion_.reset();
   std::ostringstream os;
   os.precision(3);
   os << "coarse start at the " << cfg_.imu.deadlineSeconds() << " s deadline (" << waited << "): gravity from the mean specific force (tilt sigma "
      << tilt_sigma * 180.0 / M_PI << " deg), velocity " << (have_v ? "of the last LiDAR fixes" : "0") << " (sigma " << sv
      << " m/s); the filter refines both";
+  init_message_ = os.str();
+  return true;
+}
+
+bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
+  if (initialized_) return false;
+  x_ = prior.state;
+  P_ = prior.P;
+  accel_scale_ = prior.accel_scale;
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
+  resume_imu_ = std::move(imu);
+  motion_.reset();
+  initialized_ = true;
+  map_started_ = true;  // the map holds the previous estimator's scans
+  last_imu_fed_ = prior.state.utime;
+  std::ostringstream os;
+  os.precision(3);
+  os << std::fixed << "resumed from " << source << " at t " << toSeconds(prior.state.utime) << " s (position "
+     << prior.state.p_world_imu.x() << " " << prior.state.p_world_imu.y() << " " << prior.state.p_world_imu.z()
+     << " m), " << resume_imu_.size() << " IMU samples to bridge the gap";
   init_message_ = os.str();
   return true;
 }
@@ -126,7 +148,8 @@ LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
 void LioOdometry::initAtRest(const Frame& frame) {
   x_ = init_.initialState();
   P_ = init_.initialCovariance();
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+  accel_scale_ = init_.accelScale();
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
   // Through the samples after the chosen window, up to where this frame's own samples begin (the
   // frame's propagation keeps its trace for the undistortion).
   const Utime cut = frame.imu.empty() ? x_.utime : frame.imu.front().utime;
@@ -212,6 +235,17 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
     r.state = x_;
     r.P = P_;
     return false;
+  }
+
+  // 1a'. After resume(): across the outage, through the samples up to where this frame's own begin.
+  if (!resume_imu_.empty()) {
+    const Utime cut = frame.imu.empty() ? frame.utime : frame.imu.front().utime;
+    std::vector<ImuSample> before;
+    for (const auto& s : resume_imu_)
+      if (s.utime > x_.utime && s.utime < cut) before.push_back(s);
+    if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+    resume_imu_.clear();
+    resume_imu_.shrink_to_fit();
   }
 
   // 1b. Forward propagation to the frame time, keeping the per-sample trace.

@@ -1,9 +1,12 @@
 #include "livo/eval/tum.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -85,13 +88,41 @@ void writeTum(std::ostream& out, const StampedPose& pose) {
   out << buf;
 }
 
-TumWriter::TumWriter(const std::string& path) : path_(path), out_(path, std::ios::out | std::ios::trunc) {
+TumWriter::TumWriter(const std::string& path, bool append) : path_(path) {
+  std::error_code ec;
+  const bool continue_file = append && std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > 0;
+  if (continue_file) {
+    // Keep the complete lines only (a kill may have cut the last one), and find the last time.
+    std::ifstream in(path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    if (keep < text.size()) std::filesystem::resize_file(path, keep);
+    std::istringstream lines(text.substr(0, keep));
+    std::string line;
+    while (std::getline(lines, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      double t = 0;
+      if (std::istringstream(line) >> t) {
+        last_t_ = std::max(last_t_, t);
+        ++previous_count_;
+      }
+    }
+    out_.open(path, std::ios::out | std::ios::app);
+    if (!out_) throw std::runtime_error(path + ": cannot open trajectory file for appending");
+    return;
+  }
+  out_.open(path, std::ios::out | std::ios::trunc);
   if (!out_) throw std::runtime_error(path + ": cannot open trajectory file for writing");
   out_ << "# t x y z qx qy qz qw (T_world_body, t in s)\n" << std::flush;
   if (!out_) throw std::runtime_error(path + ": write failed");
 }
 
 void TumWriter::write(const StampedPose& pose) {
+  if (!(pose.t > last_t_)) {  // at or before the last line: the file keeps strictly increasing time
+    ++skipped_;
+    return;
+  }
+  last_t_ = pose.t;
   writeTum(out_, pose);
   out_.flush();
   if (!out_) throw std::runtime_error(path_ + ": write failed after " + std::to_string(count_) + " poses");

@@ -1,6 +1,9 @@
 #include "livo/io/convert.hpp"
 
 #include <livo/estimator_stats_t.hpp>
+#include <livo/filter_state_t.hpp>
+#include <livo/resume_request_t.hpp>
+#include <livo/resume_t.hpp>
 #include <livo/map_query_t.hpp>
 #include <livo/map_stats_t.hpp>
 #include <livo/map_update_t.hpp>
@@ -275,5 +278,8 @@ template Validation decode(const void*, std::size_t, livo::odometry_t&, const Me
 template Validation decode(const void*, std::size_t, livo::registered_scan_t&, const MessageLimits&);
 template Validation decode(const void*, std::size_t, livo::estimator_stats_t&, const MessageLimits&);
 template Validation decode(const void*, std::size_t, livo::map_stats_t&, const MessageLimits&);
+template Validation decode(const void*, std::size_t, livo::filter_state_t&, const MessageLimits&);
+template Validation decode(const void*, std::size_t, livo::resume_request_t&, const MessageLimits&);
+template Validation decode(const void*, std::size_t, livo::resume_t&, const MessageLimits&);
 
 }  // namespace livo

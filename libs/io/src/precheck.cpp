@@ -4,6 +4,7 @@
 #include "livo/io/convert.hpp"
 
 #include <livo/estimator_stats_t.hpp>
+#include <livo/filter_state_t.hpp>
 #include <livo/map_query_t.hpp>
 #include <livo/map_stats_t.hpp>
 #include <livo/map_update_t.hpp>
@@ -11,6 +12,8 @@
 #include <livo/patch_t.hpp>
 #include <livo/plane_t.hpp>
 #include <livo/registered_scan_t.hpp>
+#include <livo/resume_request_t.hpp>
+#include <livo/resume_t.hpp>
 #include <livo/submap_t.hpp>
 #include <livo/visual_point_t.hpp>
 
@@ -169,6 +172,17 @@ bool walkOdometry(Walker& w, const std::string& f) { return w.skip(fixedSize<liv
 bool walkEstStats(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::estimator_stats_t>(), f); }
 bool walkMapStats(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::map_stats_t>(), f); }
 bool walkPlane(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::plane_t>(), f); }
+bool walkFilterState(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::filter_state_t>(), f); }
+bool walkResumeRequest(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::resume_request_t>(), f); }
+
+bool walkResume(Walker& w, const std::string& f) {
+  std::int32_t n = 0;
+  const std::size_t imu = fixedSize<livo::imu_t>();
+  // request_id, have_state, state; num_imu; imu; imu_dropped
+  return w.skip(8 + 1, f + ".header") && w.skip(fixedSize<livo::filter_state_t>(), f + ".state") &&
+         w.count(f + ".num_imu", w.lim().max_imu_per_frame, imu, n) && w.skip(std::size_t(n) * imu, f + ".imu") &&
+         w.skip(8, f + ".imu_dropped");
+}
 
 template <class Msg, class WalkFn>
 Validation run(const void* data, std::size_t size, const MessageLimits& lim, WalkFn walk) {
@@ -210,6 +224,9 @@ LIVO_PRECHECK(livo::odometry_t, walkOdometry)
 LIVO_PRECHECK(livo::registered_scan_t, walkRegistered)
 LIVO_PRECHECK(livo::estimator_stats_t, walkEstStats)
 LIVO_PRECHECK(livo::map_stats_t, walkMapStats)
+LIVO_PRECHECK(livo::filter_state_t, walkFilterState)
+LIVO_PRECHECK(livo::resume_request_t, walkResumeRequest)
+LIVO_PRECHECK(livo::resume_t, walkResume)
 #undef LIVO_PRECHECK
 
 }  // namespace livo

@@ -6,7 +6,12 @@
 #include "livo/io/map_messages.hpp"
 #include "livo/process/scan_colour.hpp"
 
+#include <livo/resume_request_t.hpp>
+
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
 #include <iomanip>
 #include <sstream>
 
@@ -16,12 +21,16 @@ void EstimatorNodeConfig::load(const ConfigNode& s) {
   s.get("map_timeout_ms", map_timeout_ms)
       .get("fast_timeout_ms", fast_timeout_ms)
       .get("fast_timeouts_after", fast_timeouts_after)
-      .get("max_queued_frames", max_queued_frames);
+      .get("max_queued_frames", max_queued_frames)
+      .get("resume_wait_ms", resume_wait_ms)
+      .get("resume_max_gap_s", resume_max_gap_s);
   s.check(map_timeout_ms > 0 && map_timeout_ms <= 60000, "map_timeout_ms", "must be in (0, 60000]");
   s.check(fast_timeout_ms > 0 && fast_timeout_ms <= map_timeout_ms, "fast_timeout_ms",
           "must be in (0, map_timeout_ms]");
   s.check(fast_timeouts_after >= 1, "fast_timeouts_after", "must be >= 1");
   s.check(max_queued_frames >= 1 && max_queued_frames <= 100000, "max_queued_frames", "must be in [1, 100000]");
+  s.check(resume_wait_ms >= 0 && resume_wait_ms <= 60000, "resume_wait_ms", "must be in [0, 60000]");
+  s.check(resume_max_gap_s > 0 && resume_max_gap_s <= 3600, "resume_max_gap_s", "must be in (0, 3600]");
 }
 
 EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNodeConfig cfg,
@@ -56,6 +65,65 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
     answered_ = true;
     return Validation::ok();
   });
+  if (cfg_.resume_wait_ms > 0) {
+    lcm_.subscribe<livo::resume_t>(channels_.resume, [this](const livo::resume_t& m) {
+      if (m.request_id != resume_request_id_ || resume_answered_) return Validation::ok();  // another estimator's
+      ResumeAnswer a;
+      Validation v = fromMsg(m, a, lcm_.limits());
+      if (!v) return v;
+      resume_ = std::move(a);
+      resume_answered_ = true;
+      return Validation::ok();
+    });
+    // An id of this start: the pid and the wall clock (another estimator's answer is ignored).
+    resume_request_id_ = (std::int64_t(::getpid()) << 32) ^ std::chrono::steady_clock::now().time_since_epoch().count();
+    livo::resume_request_t q{};
+    q.request_id = resume_request_id_;
+    since_resume_request_.restart();
+    lcm_.publish(channels_.resume_request, q);
+  } else {
+    started_ = true;
+    start_report_ = "new origin: resume_wait_ms is 0";
+  }
+}
+
+void EstimatorNode::startFrom(const Frame& first) {
+  started_ = true;
+  while (!resume_answered_) {
+    const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
+    if (left <= 0) break;
+    lcm_.handleOnce(std::max(1, int(left)));
+  }
+  std::ostringstream why;
+  why << std::fixed << std::setprecision(3);
+  if (!resume_answered_) {
+    why << "new origin: no answer from the map server within resume_wait_ms (" << cfg_.resume_wait_ms << " ms)";
+  } else if (!resume_.have_state) {
+    why << "new origin: the map server holds no filter state (a new run)";
+  } else {
+    const Utime t0 = resume_.snapshot.filter.state.utime;
+    const double gap = toSeconds(first.utime - t0);
+    if (gap <= 0) {
+      why << "new origin: the map server's last state (t " << toSeconds(t0) << " s) is not older than the first frame (t "
+          << toSeconds(first.utime) << " s): another run";
+    } else if (gap > cfg_.resume_max_gap_s) {
+      why << "new origin: the map server's last state is " << gap << " s older than the first frame (resume_max_gap_s "
+          << cfg_.resume_max_gap_s << ")";
+    } else {
+      std::ostringstream src;
+      src << std::fixed << std::setprecision(3) << "the map server's last filter state (" << gap << " s before the first frame, "
+          << resume_.snapshot.frames << " frames of the previous estimator";
+      if (resume_.imu_dropped > 0) src << ", " << resume_.imu_dropped << " IMU samples lost";
+      src << ")";
+      pipeline_.resume(resume_.snapshot.filter, std::move(resume_.imu), src.str());
+      start_report_ = "resumed";
+      resume_ = ResumeAnswer{};
+      return;
+    }
+  }
+  start_report_ = why.str();
+  resume_ = ResumeAnswer{};
+  if (log_) *log_ << "livo-estimator: " << start_report_ << "\n";
 }
 
 bool EstimatorNode::request(const MapQuery& q, Submap& out) {
@@ -113,6 +181,7 @@ std::size_t EstimatorNode::poll() {
 }
 
 void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
+  if (!started_) startFrom(frame);
   counters_.nonfinite_points += nonfinite;
   const FrameResult f = pipeline_.process(frame, map_);
   ++counters_.frames;
@@ -144,6 +213,11 @@ void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
   if (f.lio.lio_ok) o.status |= odometry_status::kLidarUpdate;
   lcm_.publish(channels_.odometry, toMsg(o));
   ++counters_.odometry_published;
+  // The whole filter state, for an estimator that restarts (the map server keeps the latest).
+  FilterSnapshot snap;
+  snap.filter = FilterState{f.lio.state, f.lio.P, pipeline_.odometry().filterState().accel_scale};
+  snap.frames = std::int64_t(counters_.frames);
+  lcm_.publish(channels_.filter_state, toMsg(snap));
 
   if (!f.lio.points.empty()) {
     const CameraModel* cam = pipeline_.camera();
@@ -169,6 +243,7 @@ std::string EstimatorNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
      << counters_.odometry_published << "\n";
+  os << "start: " << (start_report_.empty() ? "no frame" : start_report_) << "\n";
   os << "map queries " << counters_.queries << ": answered " << counters_.answered << ", timeouts "
      << counters_.timeouts << ", late answers " << counters_.late_submaps << ", invalid answers "
      << counters_.invalid_submaps << "\n";

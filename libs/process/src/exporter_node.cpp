@@ -10,7 +10,7 @@ namespace livo {
 
 ExporterNode::ExporterNode(LcmNode& lcm, const ChannelConfig& channels, const MapExportConfig& cfg,
                            const std::string& out_dir, std::ostream* log)
-    : lcm_(lcm), channels_(channels), cfg_(cfg), log_(log), outputs_(out_dir), cloud_(cfg), occupancy_(cfg) {
+    : lcm_(lcm), channels_(channels), cfg_(cfg), log_(log), outputs_(out_dir, /*append=*/true), cloud_(cfg), occupancy_(cfg) {
   lcm_.subscribeStruct<livo::odometry_t, OdometryOutput>(channels_.odometry,
                                                           [this](OdometryOutput& o) { onOdometry(o); });
   lcm_.subscribeStruct<livo::estimator_stats_t, EstimatorStats>(channels_.estimator_stats,
@@ -18,6 +18,10 @@ ExporterNode::ExporterNode(LcmNode& lcm, const ChannelConfig& channels, const Ma
   lcm_.subscribeStruct<livo::registered_scan_t, RegisteredScan>(channels_.registered_scan,
                                                                  [this](RegisteredScan& s) { onRegisteredScan(s); });
   lcm_.subscribeStruct<livo::map_stats_t, MapStats>(channels_.map_stats, [this](MapStats& m) { onMapStats(m); });
+  if (outputs_.previousPoses() > 0 && log_)
+    *log_ << "livo-exporter: continuing " << out_dir << "/trajectory.tum (" << outputs_.previousPoses()
+          << " poses, the last at t " << std::fixed << std::setprecision(6) << outputs_.lastPoseTime()
+          << " s): frames at or before it are left out (another run? then use a new --out)\n";
 }
 
 bool ExporterNode::acceptFrameTime(Utime t, const char* what) {
@@ -160,6 +164,8 @@ void ExporterNode::finish() {
     counters_["received_" + channel] = double(c.received);
     counters_["rejected_" + channel] = double(c.rejected);
   }
+  counters_["previous_poses"] = double(outputs_.previousPoses());
+  counters_["frames_not_after_existing_files"] = double(outputs_.skippedFrames());
   counters_["map_pcd_points"] = double(cloud_.size());
   counters_["map_pcd_points_colored"] = double(cloud_.voxelsColored());
   counters_["map_points_dropped"] = double(cloud_.pointsDropped());
@@ -194,6 +200,9 @@ std::string ExporterNode::summary() const {
   for (const auto& [k, v] : counters_)
     if (k.find("late") != std::string::npos || k.find("without") != std::string::npos)
       os << "  " << k << ": " << v << "\n";
+  if (outputs_.previousPoses() > 0)
+    os << "continued files holding " << outputs_.previousPoses() << " poses; frames left out (not after their end) "
+       << outputs_.skippedFrames() << "\n";
   os << "outputs in " << outputs_.dir() << "\n";
   return os.str();
 }

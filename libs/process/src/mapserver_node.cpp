@@ -10,10 +10,72 @@
 namespace livo {
 
 MapServerNode::MapServerNode(LcmNode& lcm, MapService& service, const ChannelConfig& channels, std::ostream* log,
-                             double stats_interval_s)
-    : lcm_(lcm), service_(service), channels_(channels), log_(log), stats_interval_s_(stats_interval_s) {
+                             double stats_interval_s, std::size_t max_resume_imu)
+    : lcm_(lcm), service_(service), channels_(channels), log_(log), stats_interval_s_(stats_interval_s),
+      max_resume_imu_(std::max<std::size_t>(1, max_resume_imu)) {
   lcm_.subscribe<livo::map_query_t>(channels_.map_query, [this](const livo::map_query_t& m) { return onQuery(m); });
   lcm_.subscribe<livo::map_update_t>(channels_.map_update, [this](const livo::map_update_t& m) { return onUpdate(m); });
+  lcm_.subscribe<livo::filter_state_t>(channels_.filter_state,
+                                       [this](const livo::filter_state_t& m) { return onFilterState(m); });
+  lcm_.subscribe<livo::imu_t>(channels_.imu, [this](const livo::imu_t& m) { return onImu(m); });
+  lcm_.subscribe<livo::resume_request_t>(channels_.resume_request,
+                                         [this](const livo::resume_request_t& m) { return onResumeRequest(m); });
+}
+
+Validation MapServerNode::onFilterState(const livo::filter_state_t& m) {
+  FilterSnapshot s;
+  Validation v = fromMsg(m, s);
+  if (!v) return v;
+  last_state_ = std::move(s);
+  have_state_ = true;
+  ++counters_.filter_states;
+  const Utime t = last_state_.filter.state.utime;
+  while (!imu_since_.empty() && imu_since_.front().utime <= t) imu_since_.pop_front();
+  imu_dropped_since_ = 0;
+  return Validation::ok();
+}
+
+Validation MapServerNode::onImu(const livo::imu_t& m) {
+  ImuSample s;
+  Validation v = fromMsg(m, s);
+  if (!v) return v;
+  if (have_state_ && s.utime <= last_state_.filter.state.utime) return Validation::ok();  // covered by the state
+  if (!imu_since_.empty() && s.utime <= imu_since_.back().utime) {
+    if (s.utime < imu_since_.back().utime) imu_since_.clear();  // time went back (a new log): start again
+    else return Validation::ok();                                // a duplicate
+  }
+  if (imu_since_.size() >= max_resume_imu_) {
+    imu_since_.pop_front();
+    if (have_state_) {
+      ++imu_dropped_since_;
+      ++counters_.resume_imu_dropped;
+    }
+  }
+  imu_since_.push_back(s);
+  return Validation::ok();
+}
+
+Validation MapServerNode::onResumeRequest(const livo::resume_request_t& m) {
+  ResumeAnswer a;
+  a.request_id = m.request_id;
+  a.have_state = have_state_;
+  if (have_state_) {
+    a.snapshot = last_state_;
+    a.imu.assign(imu_since_.begin(), imu_since_.end());
+    a.imu_dropped = std::int64_t(imu_dropped_since_);
+  }
+  lcm_.publish(channels_.resume, toMsg(a));
+  ++counters_.resume_answers;
+  if (have_state_) ++counters_.resume_with_state;
+  if (log_) {
+    *log_ << "livo-mapserver: an estimator asked for the last filter state: ";
+    if (have_state_)
+      *log_ << "sent the state of t " << toSeconds(last_state_.filter.state.utime) << " s with " << a.imu.size()
+            << " IMU samples after it\n";
+    else
+      *log_ << "none yet (a new run)\n";
+  }
+  return Validation::ok();
 }
 
 Validation MapServerNode::onQuery(const livo::map_query_t& m) {
@@ -98,6 +160,9 @@ std::string MapServerNode::summary() const {
   os << "slides " << h.slides << " (worst " << h.max_slide_ms << " ms), evicted: voxels " << h.evicted_local_voxels
      << ", visual points " << h.evicted_longterm_points + h.evicted_local_points << "; worst update "
      << c.max_update_ms << " ms at t " << toSeconds(Utime(counters_.worst_update_utime)) << " s\n";
+  os << "estimator restarts: filter states " << counters_.filter_states << ", resume answers " << counters_.resume_answers
+     << " (with a state " << counters_.resume_with_state << "), IMU samples dropped from the buffer "
+     << counters_.resume_imu_dropped << "\n";
   os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();

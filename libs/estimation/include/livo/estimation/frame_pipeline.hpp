@@ -38,6 +38,14 @@ class FramePipeline {
   /// Runs steps 1-7 on one frame (time order) against `map`.
   FrameResult process(const Frame& frame, MapAccess& map);
 
+  /// Continues another estimator's run from its last state (LioOdometry::resume; the covariance holds
+  /// t_d's prior already). Before the first frame only: false once initialised.
+  bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
+    if (!lio_.resume(prior, std::move(imu), source)) return false;
+    time_offset_prior_set_ = true;
+    return true;
+  }
+
   const PipelineConfig& config() const { return cfg_; }
   /// The camera model at the processing scale (null without a camera).
   const CameraModel* camera() const { return camera_.get(); }

@@ -30,6 +30,14 @@ struct LioOdometryConfig {
   void load(const ConfigNode& root);
 };
 
+/// The whole filter state after a frame: what a restarted estimator needs to continue in the same world
+/// frame (LioOdometry::filterState / resume).
+struct FilterState {
+  NavState state;
+  StateCov P = StateCov::Zero();
+  double accel_scale = 1.0;  ///< accelerometer units found at initialisation (ImuPropagator)
+};
+
 /// What one frame produced (LiDAR-inertial part).
 struct LioFrameResult {
   Utime utime = 0;
@@ -74,6 +82,15 @@ class LioOdometry {
   /// (mapFrameFromFirstScan; r.P is updated).
   void markInserted(LioFrameResult& r);
 
+  /// Starts from another estimator's last state instead of initialising (a restart in the middle of a
+  /// run: the map already holds that estimator's scans). `imu`: the samples after prior.state.utime
+  /// (time ordered) that the next predict() propagates through up to its frame's own samples, so the
+  /// outage costs only the IMU's drift over it. Before the first frame only; returns false (and does
+  /// nothing) once initialised.
+  bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source);
+  /// The state after the last frame, with its covariance and the accelerometer units (after initialized()).
+  FilterState filterState() const { return FilterState{x_, P_, accel_scale_}; }
+
   /// True once a scan went into the map (update() runs from then on).
   bool mapStarted() const { return map_started_; }
   /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
@@ -109,6 +126,8 @@ class LioOdometry {
   bool initialized_ = false;
   int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
   std::unique_ptr<ImuPropagator> propagator_;
+  double accel_scale_ = 1.0;          ///< the propagator's
+  std::vector<ImuSample> resume_imu_;  ///< resume(): samples to propagate through before the next frame's
   NavState x_;
   StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;

@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <ostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,18 +37,28 @@ void writeTum(std::ostream& out, const StampedPose& pose);
 /// pose being written. Writes a '#' header line first.
 class TumWriter {
  public:
-  /// Opens (truncates) `path`; throws std::runtime_error naming the file when it cannot.
-  explicit TumWriter(const std::string& path);
+  /// Opens (truncates) `path`; throws std::runtime_error naming the file when it cannot. With `append`
+  /// an existing file is continued instead (a restarted writer): a last line cut short by a kill is
+  /// removed, and poses at or before the file's last time are skipped (counted), so the file stays in
+  /// strictly increasing time.
+  explicit TumWriter(const std::string& path, bool append = false);
   /// Writes and flushes one line; throws std::runtime_error when the write fails (disk full).
   void write(const StampedPose& pose);
   void write(double t, const Pose& T_world_body) { write(StampedPose{t, T_world_body}); }
+  /// Poses written by this writer (not those the file held before).
   std::size_t count() const { return count_; }
+  /// Append mode: poses the file held when opened, its last time (-inf when none), poses skipped since.
+  std::size_t previousCount() const { return previous_count_; }
+  double lastTime() const { return last_t_; }
+  std::size_t skipped() const { return skipped_; }
   const std::string& path() const { return path_; }
 
  private:
   std::string path_;
   std::ofstream out_;
   std::size_t count_ = 0;
+  std::size_t previous_count_ = 0, skipped_ = 0;
+  double last_t_ = -std::numeric_limits<double>::infinity();
 };
 
 }  // namespace livo

@@ -22,6 +22,11 @@ struct ChannelConfig {
   std::string registered_scan = "LIVO_REGISTERED_SCAN";
   std::string estimator_stats = "LIVO_ESTIMATOR_STATS";
   std::string map_stats = "LIVO_MAP_STATS";
+  // Restarts: the estimator's filter state after each frame (kept by the map server), a starting
+  // estimator's request for it and the map server's answer (livo/io/resume_messages.hpp).
+  std::string filter_state = "LIVO_FILTER_STATE";
+  std::string resume_request = "LIVO_RESUME_REQUEST";
+  std::string resume = "LIVO_RESUME";
 
   /// Reads the `channels` section.
   void load(const ConfigNode& channels);

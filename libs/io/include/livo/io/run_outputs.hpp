@@ -93,8 +93,10 @@ struct MapSummary {
 class RunOutputs {
  public:
   /// Creates `dir` (and parents) and opens trajectory.tum and frames.csv; throws std::runtime_error
-  /// naming the path on failure.
-  explicit RunOutputs(const std::string& dir);
+  /// naming the path on failure. With `append` (livo-exporter) existing files are continued, never
+  /// truncated: a line cut short by a kill is removed, and frames at or before the files' last time
+  /// are left out of both (counted: skippedFrames()); stats.json covers this writer's frames.
+  explicit RunOutputs(const std::string& dir, bool append = false);
 
   void addFrame(const FrameRecord& f);
   /// Writes stats.json (atomically: temp file + rename). `counters` are extra integer counters
@@ -105,15 +107,22 @@ class RunOutputs {
 
   std::size_t frames() const { return records_.size(); }
   std::size_t posesWritten() const { return tum_.count(); }
+  /// Append mode: poses trajectory.tum held when opened, and frames left out since (not after its end).
+  std::size_t previousPoses() const { return tum_.previousCount(); }
+  std::size_t skippedFrames() const { return skipped_frames_; }
+  double lastPoseTime() const { return tum_.lastTime(); }
   const std::string& dir() const { return dir_; }
   /// Human-readable summary (frames, timings) for stdout.
   std::string summary(double peak_rss_mb) const;
 
  private:
   std::string dir_;
+  bool append_;
   TumWriter tum_;
   std::ofstream csv_;
   std::vector<FrameRecord> records_;
+  double last_csv_t_;  ///< frames.csv's last time (-inf: none)
+  std::size_t skipped_frames_ = 0;
 };
 
 }  // namespace livo

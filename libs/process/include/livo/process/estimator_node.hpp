@@ -9,12 +9,21 @@
 // continue with the planes it has (reported in the stats and the odometry status); after
 // `fast_timeouts_after` consecutive timeouts the wait shrinks to fast_timeout_ms until the map server
 // answers again, so a dead map server slows nothing down for long. Config section `estimator`.
+//
+// Restarts: after every frame with a pose the node publishes its whole filter state (LIVO_FILTER_STATE,
+// filter_state_t), which the map server keeps with the IMU samples after it. At start the node asks
+// for them (LIVO_RESUME_REQUEST); the first frame waits up to resume_wait_ms for the answer. With a
+// state at most resume_max_gap_s older than that frame, the pipeline continues from it (propagated
+// through the IMU samples of the outage) in the same world frame and map; otherwise it says why and
+// initialises a new origin as usual.
 #pragma once
 
 #include "livo/common/config.hpp"
 #include "livo/estimation/frame_pipeline.hpp"
 #include "livo/estimation/remote_map.hpp"
+#include "livo/common/timing.hpp"
 #include "livo/io/channels.hpp"
+#include "livo/io/resume_messages.hpp"
 #include "livo/process/lcm_node.hpp"
 
 #include <cstdint>
@@ -29,6 +38,8 @@ struct EstimatorNodeConfig {
   double fast_timeout_ms = 20.0;   ///< wait after fast_timeouts_after timeouts in a row, ms
   int fast_timeouts_after = 3;
   int max_queued_frames = 100;     ///< older frames beyond this are dropped (counted, warned)
+  double resume_wait_ms = 1000.0;  ///< at start, wait this long for the map server's last state (0: never resume)
+  double resume_max_gap_s = 10.0;  ///< resume only when the first frame is at most this long after that state
   void load(const ConfigNode& section);  ///< section `estimator`
 };
 
@@ -42,6 +53,9 @@ class EstimatorNode : public MapClient {
   // MapClient over LCM.
   bool request(const MapQuery& q, Submap& out) override;
   void send(const MapUpdate& u) override;
+
+  /// How the node started (after the first frame): "resumed", "new origin: <why>" or "" before it.
+  const std::string& startReport() const { return start_report_; }
 
   struct Counters {
     std::uint64_t frames = 0;             ///< processed
@@ -62,6 +76,9 @@ class EstimatorNode : public MapClient {
 
  private:
   void processFrame(const Frame& f, std::size_t nonfinite);
+  /// Before the first frame: waits (up to resume_wait_ms since the request) for the map server's answer
+  /// and resumes from it when it fits the frame.
+  void startFrom(const Frame& first);
 
   LcmNode& lcm_;
   EstimatorNodeConfig cfg_;
@@ -78,6 +95,12 @@ class EstimatorNode : public MapClient {
   int timeouts_in_row_ = 0;
   Utime last_wait_said_ = -1;  ///< last "no pose yet" line (sensor time)
   bool announced_init_ = false;
+  // Resume at start.
+  std::int64_t resume_request_id_ = 0;
+  bool resume_answered_ = false, started_ = false;
+  Stopwatch since_resume_request_;
+  ResumeAnswer resume_;
+  std::string start_report_;
   Counters counters_;
 };
 

@@ -8,7 +8,9 @@
 //       (rays from the frame's odometry position), written by finish();
 //   LIVO_MAP_STATS -> the newest one is the `map` section of stats.json, written by finish().
 // Frames arriving at or before a frame already written are counted and dropped (the TUM file stays
-// strictly increasing). Only message times are used.
+// strictly increasing). Only message times are used. An existing trajectory.tum / frames.csv in the
+// output directory is continued, never truncated (a restarted exporter: RunOutputs' append mode);
+// map.pcd, map.bt and stats.json are written at finish() from what this process received.
 #pragma once
 
 #include "livo/io/channels.hpp"

@@ -2,6 +2,10 @@
 // in -> LIVO_SUBMAP out, LIVO_MAP_UPDATE in, LIVO_MAP_STATS out once per second of message time (and
 // at the end). Messages are handled in arrival order, so an update sent before the next query is in
 // the map when that query is answered.
+//
+// Restarts of the estimator: the node keeps the latest LIVO_FILTER_STATE and the LIVO_IMU samples after
+// it (at most `max_resume_imu`, the oldest dropped and counted), and answers LIVO_RESUME_REQUEST with
+// both on LIVO_RESUME (livo/io/resume_messages.hpp; estimator_node.hpp says what the estimator does).
 #pragma once
 
 #include "livo/io/channels.hpp"
@@ -9,9 +13,12 @@
 
 #include <livo/map_query_t.hpp>
 #include <livo/map_update_t.hpp>
+#include <livo/resume_request_t.hpp>
+#include "livo/io/resume_messages.hpp"
 #include "livo/process/lcm_node.hpp"
 
 #include <cstdint>
+#include <deque>
 #include <ostream>
 #include <string>
 
@@ -20,7 +27,7 @@ namespace livo {
 class MapServerNode {
  public:
   MapServerNode(LcmNode& lcm, MapService& service, const ChannelConfig& channels, std::ostream* log,
-                double stats_interval_s = 1.0);
+                double stats_interval_s = 1.0, std::size_t max_resume_imu = 12000);
   /// Publishes LIVO_MAP_STATS now (exact counts).
   void publishStats();
 
@@ -29,6 +36,10 @@ class MapServerNode {
     std::uint64_t max_submap_planes = 0, max_submap_visual_points = 0;
     std::uint64_t stats_published = 0;
     std::uint64_t worst_update_utime = 0;
+    std::uint64_t filter_states = 0;      ///< LIVO_FILTER_STATE received (valid)
+    std::uint64_t resume_answers = 0;     ///< LIVO_RESUME sent
+    std::uint64_t resume_with_state = 0;  ///< ... of those with a state
+    std::uint64_t resume_imu_dropped = 0; ///< IMU samples after the last state dropped (buffer full)
   };
   const Counters& counters() const { return counters_; }
   std::string progressLine() const;
@@ -38,6 +49,9 @@ class MapServerNode {
   Validation onQuery(const livo::map_query_t& m);
   Validation onUpdate(const livo::map_update_t& m);
   void maybeStats(Utime t);
+  Validation onFilterState(const livo::filter_state_t& m);
+  Validation onImu(const livo::imu_t& m);
+  Validation onResumeRequest(const livo::resume_request_t& m);
 
   LcmNode& lcm_;
   MapService& service_;
@@ -47,6 +61,12 @@ class MapServerNode {
   bool have_stats_time_ = false;
   Utime last_stats_utime_ = 0;
   Counters counters_;
+  // Resume support.
+  std::size_t max_resume_imu_;
+  bool have_state_ = false;
+  FilterSnapshot last_state_;
+  std::deque<ImuSample> imu_since_;  ///< samples after last_state_'s time (or the newest, before any state)
+  std::uint64_t imu_dropped_since_ = 0;
 };
 
 }  // namespace livo
