@@ -1,7 +1,7 @@
 // Kill any process, keep the run: the room scenario replayed through the suite's four processes
 // (livo-preprocess, livo-estimator, livo-mapserver, livo-exporter) in a private network namespace,
 // once undisturbed and once per process with that process killed by SIGKILL at a random time (fixed
-// seeds) and started again at once, as procman / run-local would. Each disturbed run must export a
+// seeds) and started again 1 s later, as run-local would. Each disturbed run must export a
 // trajectory in strictly increasing time (no duplicate, no line out of order: the restarted exporter
 // continues its files), without a gap over 1.5 s around the kill, at most 1.5x the undisturbed ATE
 // (the restarted estimator continues from the map server's last filter state in the same world frame).
@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <csignal>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -89,9 +90,11 @@ struct Suite {
     EXPECT_TRUE(waitUntil([&] { return readFile(log(name, k)).find(" on " + kUrl) != std::string::npos; }, 60))
         << log(name, k) << ":\n" << readFile(log(name, k));
   }
-  void killAndRestart(const std::string& name) {
+  /// SIGKILL, then a new start after `down_s` (run-local restarts a crashed command after 1 s).
+  void killAndRestart(const std::string& name, double down_s) {
     procs[name]->signal(SIGKILL);
     EXPECT_EQ(procs[name]->wait(10), -SIGKILL);
+    test::sleepS(down_s);  // the outage the run must survive, not a wait for anything
     start(name);
   }
   std::size_t poses() const { return test::countLines(out + "/export/trajectory.tum"); }
@@ -129,7 +132,7 @@ RunResult run(const Netns& ns, const std::string& tag, const std::string& victim
       return r;
     }
     r.kill_t = readTum(suite.out + "/export/trajectory.tum").back().t;
-    suite.killAndRestart(victim);
+    suite.killAndRestart(victim, 1.0);
   }
   EXPECT_EQ(player->wait(120), 0) << readFile(suite.out + "/player.txt");
   suite.finish();
@@ -166,7 +169,7 @@ void chaos(const std::string& victim, unsigned seed) {
   const auto at = std::uniform_int_distribution<std::size_t>(40, 110)(rng);
   const RunResult r = run(ns, "kill_" + victim, victim, at);
   ASSERT_TRUE(r.ok) << r.error << "\n" << r.logs;
-  std::cout << victim << " killed after " << at << " poses (t " << r.kill_t << " s): " << r.traj.size()
+  std::cout << std::fixed << std::setprecision(3) << victim << " killed after " << at << " poses (t " << r.kill_t << " s): " << r.traj.size()
             << " poses, longest gap " << r.longest_gap_s << " s, ATE " << r.ate_m * 100 << " cm; undisturbed "
             << base.traj.size() << " poses, longest gap " << base.longest_gap_s << " s, ATE " << base.ate_m * 100
             << " cm\n";
@@ -180,7 +183,9 @@ void chaos(const std::string& victim, unsigned seed) {
 TEST(ChaosNetns, EstimatorKilledResumesFromTheMapServersState) {
   chaos("estimator", 1);
   const std::string logs = readFile(roomLog().dir + "/kill_estimator/estimator2.txt");
-  EXPECT_NE(logs.find("resumed from the map server's last filter state"), std::string::npos) << logs;
+  const std::size_t at = logs.find("resumed from the map server's last filter state");
+  ASSERT_NE(at, std::string::npos) << logs;
+  std::cout << logs.substr(logs.rfind('\n', at) + 1, logs.find('\n', at) - logs.rfind('\n', at)) << "\n";
 }
 
 TEST(ChaosNetns, PreprocessKilled) { chaos("preprocess", 2); }

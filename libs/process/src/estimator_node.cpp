@@ -75,8 +75,7 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
       resume_answered_ = true;
       return Validation::ok();
     });
-    // An id of this start: the pid and the wall clock (another estimator's answer is ignored).
-    resume_request_id_ = (std::int64_t(::getpid()) << 32) ^ std::chrono::steady_clock::now().time_since_epoch().count();
+    resume_request_id_ = newRequestId();
     livo::resume_request_t q{};
     q.request_id = resume_request_id_;
     since_resume_request_.restart();
@@ -89,7 +88,7 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
 
 void EstimatorNode::startFrom(const Frame& first) {
   started_ = true;
-  while (!resume_answered_) {
+  while (!resume_answered_) {  // the request went out at construction
     const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
     if (left <= 0) break;
     lcm_.handleOnce(std::max(1, int(left)));
@@ -180,8 +179,68 @@ std::size_t EstimatorNode::poll() {
   return n;
 }
 
-void EstimatorNode::processFrame(const Frame& frame, std::size_t nonfinite) {
-  if (!started_) startFrom(frame);
+std::int64_t EstimatorNode::newRequestId() {
+  // The pid and the clock: another estimator's request (and its answer) has another id.
+  return (std::int64_t(::getpid()) << 32) ^ std::chrono::steady_clock::now().time_since_epoch().count();
+}
+
+bool EstimatorNode::askMapServer() {
+  resume_request_id_ = newRequestId();
+  resume_answered_ = false;
+  livo::resume_request_t q{};
+  q.request_id = resume_request_id_;
+  since_resume_request_.restart();
+  lcm_.publish(channels_.resume_request, q);
+  while (!resume_answered_) {
+    const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
+    if (left <= 0) break;
+    lcm_.handleOnce(std::max(1, int(left)));
+  }
+  return resume_answered_;
+}
+
+bool EstimatorNode::bridgeImuGap(Frame& frame) {
+  const Utime t_state = pipeline_.odometry().state().utime;
+  const double gap = toSeconds(frame.imu.front().utime - t_state);
+  ++counters_.imu_gaps;
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3) << "livo-estimator: the frame at t " << toSeconds(frame.utime)
+     << " s has no IMU sample for the first " << gap << " s after the last state (frames lost upstream): ";
+  bool bridged = false;
+  if (cfg_.resume_wait_ms <= 0) {
+    os << "resume_wait_ms is 0, not asked";
+  } else if (!askMapServer()) {
+    os << "no answer from the map server; the filter holds the first sample across the gap";
+  } else if (!resume_.have_state || resume_.snapshot.filter.state.utime != t_state) {
+    os << "the map server holds samples after another state; the filter holds the first sample across the gap";
+  } else {
+    std::vector<ImuSample> imu;
+    for (const ImuSample& s : resume_.imu)
+      if (s.utime > t_state && s.utime < frame.imu.front().utime) imu.push_back(s);
+    counters_.imu_bridged_samples += imu.size();
+    os << imu.size() << " samples from the map server fill it";
+    imu.insert(imu.end(), frame.imu.begin(), frame.imu.end());
+    frame.imu = std::move(imu);
+    bridged = true;
+  }
+  resume_ = ResumeAnswer{};
+  if (log_ && shouldWarn(counters_.imu_gaps)) *log_ << os.str() << "\n";
+  return bridged;
+}
+
+void EstimatorNode::processFrame(const Frame& in, std::size_t nonfinite) {
+  if (!started_) startFrom(in);
+  // IMU lost upstream (a restarted preprocessor, dropped frames): the map server holds the samples
+  // after this estimator's last state.
+  Frame bridged_frame;
+  const Frame* fp = &in;
+  const double period_s = 1.0 / pipeline_.config().lio.imu.rate_hz;
+  if (pipeline_.odometry().initialized() && !in.imu.empty() &&
+      toSeconds(in.imu.front().utime - pipeline_.odometry().state().utime) > 3.0 * period_s) {
+    bridged_frame = in;
+    if (bridgeImuGap(bridged_frame)) fp = &bridged_frame;
+  }
+  const Frame& frame = *fp;
   counters_.nonfinite_points += nonfinite;
   const FrameResult f = pipeline_.process(frame, map_);
   ++counters_.frames;
@@ -243,7 +302,8 @@ std::string EstimatorNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
      << counters_.odometry_published << "\n";
-  os << "start: " << (start_report_.empty() ? "no frame" : start_report_) << "\n";
+  os << "start: " << (start_report_.empty() ? "no frame" : start_report_) << "; IMU gaps " << counters_.imu_gaps
+     << " (samples from the map server " << counters_.imu_bridged_samples << ")\n";
   os << "map queries " << counters_.queries << ": answered " << counters_.answered << ", timeouts "
      << counters_.timeouts << ", late answers " << counters_.late_submaps << ", invalid answers "
      << counters_.invalid_submaps << "\n";

@@ -15,7 +15,9 @@
 // for them (LIVO_RESUME_REQUEST); the first frame waits up to resume_wait_ms for the answer. With a
 // state at most resume_max_gap_s older than that frame, the pipeline continues from it (propagated
 // through the IMU samples of the outage) in the same world frame and map; otherwise it says why and
-// initialises a new origin as usual.
+// initialises a new origin as usual. A frame whose IMU samples begin more than three sample periods
+// after the filter state (frames lost upstream, e.g. a restarted preprocessor) gets the missing
+// samples from the map server the same way.
 #pragma once
 
 #include "livo/common/config.hpp"
@@ -66,6 +68,8 @@ class EstimatorNode : public MapClient {
     double max_round_trip_ms = 0.0, sum_round_trip_ms = 0.0;
     std::uint64_t answered = 0;
     std::uint64_t nonfinite_points = 0;
+    std::uint64_t imu_gaps = 0;             ///< frames whose IMU began after a gap (frames lost upstream)
+    std::uint64_t imu_bridged_samples = 0;  ///< samples the map server supplied for them
     Utime last_utime = 0;
   };
   const Counters& counters() const { return counters_; }
@@ -79,6 +83,11 @@ class EstimatorNode : public MapClient {
   /// Before the first frame: waits (up to resume_wait_ms since the request) for the map server's answer
   /// and resumes from it when it fits the frame.
   void startFrom(const Frame& first);
+  static std::int64_t newRequestId();
+  /// Publishes a resume request and waits up to resume_wait_ms for the answer (in resume_).
+  bool askMapServer();
+  /// `frame`'s IMU begins later than the filter state: prepends the map server's samples of the gap.
+  bool bridgeImuGap(Frame& frame);
 
   LcmNode& lcm_;
   EstimatorNodeConfig cfg_;
