@@ -229,13 +229,17 @@ bool EstimatorNode::bridgeImuGap(Frame& frame) {
 }
 
 void EstimatorNode::processFrame(const Frame& in, std::size_t nonfinite) {
-  if (!started_) startFrom(in);
+  bool resumed_now = false;
+  if (!started_) {
+    startFrom(in);
+    resumed_now = start_report_ == "resumed";  // the resume answer's samples bridge this frame's gap
+  }
   // IMU lost upstream (a restarted preprocessor, dropped frames): the map server holds the samples
   // after this estimator's last state.
   Frame bridged_frame;
   const Frame* fp = &in;
   const double period_s = 1.0 / pipeline_.config().lio.imu.rate_hz;
-  if (pipeline_.odometry().initialized() && !in.imu.empty() &&
+  if (!resumed_now && pipeline_.odometry().initialized() && !in.imu.empty() &&
       toSeconds(in.imu.front().utime - pipeline_.odometry().state().utime) > 3.0 * period_s) {
     bridged_frame = in;
     if (bridgeImuGap(bridged_frame)) fp = &bridged_frame;

@@ -41,8 +41,9 @@ Validation MapServerNode::onImu(const livo::imu_t& m) {
   if (!v) return v;
   if (have_state_ && s.utime <= last_state_.filter.state.utime) return Validation::ok();  // covered by the state
   if (!imu_since_.empty() && s.utime <= imu_since_.back().utime) {
-    if (s.utime < imu_since_.back().utime) imu_since_.clear();  // time went back (a new log): start again
-    else return Validation::ok();                                // a duplicate
+    // Far back: a new log (start again); else a duplicate or a sample out of order (left out).
+    if (toSeconds(imu_since_.back().utime - s.utime) > 1.0) imu_since_.clear();
+    else return Validation::ok();
   }
   if (imu_since_.size() >= max_resume_imu_) {
     imu_since_.pop_front();
