@@ -7,10 +7,14 @@
 
 #include <gtest/gtest.h>
 
+#include "livo/eval/tum.hpp"
+
+#include <fstream>
 #include <regex>
 #include <string>
 
 using namespace livo;
+using test::readFile;
 
 namespace {
 
@@ -79,4 +83,41 @@ TEST(RunOutputs, NoVisualFrameGivesNullPerImageStatistics) {
   EXPECT_EQ(timing(stats, "vio_per_visual_frame"),
             "{\"mean\": null, \"median\": null, \"p95\": null, \"max\": null, \"count\": 0}");
   EXPECT_EQ(timing(stats, "vio"), "{\"mean\": 0, \"median\": 0, \"p95\": 0, \"max\": 0, \"count\": 4}");
+}
+
+TEST(RunOutputs, AppendModeContinuesFilesCutByAKillAndKeepsTimeIncreasing) {
+  const std::string dir = test::tempDir("run_outputs_append");
+  {
+    RunOutputs first(dir, /*append=*/true);  // nothing there yet: a new file with its header
+    for (int i = 1; i <= 3; ++i) first.addFrame(frame(i * 100000, true, 2, 0, false));
+  }
+  // A kill in the middle of writing a line of each file.
+  { std::ofstream(dir + "/trajectory.tum", std::ios::app) << "0.4 1.0 2.0"; }
+  { std::ofstream(dir + "/frames.csv", std::ios::app) << "0.400000,3.1"; }
+  {
+    RunOutputs second(dir, /*append=*/true);
+    EXPECT_EQ(second.previousPoses(), 3u);
+    EXPECT_DOUBLE_EQ(second.lastPoseTime(), 0.3);
+    // Frames the first writer wrote already (a replay overlap) are left out; later ones follow.
+    second.addFrame(frame(200000, true, 2, 0, false));
+    second.addFrame(frame(300000, true, 2, 0, false));
+    second.addFrame(frame(500000, true, 2, 0, false));
+    second.addFrame(frame(600000, false, 2, 0, false));
+    EXPECT_EQ(second.skippedFrames(), 2u);
+    EXPECT_EQ(second.frames(), 2u);
+    EXPECT_EQ(second.posesWritten(), 1u);
+  }
+  const Trajectory t = readTum(dir + "/trajectory.tum");  // throws on a partial or non-increasing line
+  ASSERT_EQ(t.size(), 4u);
+  EXPECT_DOUBLE_EQ(t.back().t, 0.5);
+  const std::vector<std::string> rows = test::lines(readFile(dir + "/frames.csv"));
+  ASSERT_EQ(rows.size(), 1u + 3 + 2) << "one header, three rows, two rows";
+  EXPECT_EQ(rows[0].rfind("t,lio_ms", 0), 0u);
+  EXPECT_EQ(rows[4].rfind("0.500000,", 0), 0u) << rows[4];
+  EXPECT_EQ(rows[5].rfind("0.600000,", 0), 0u) << rows[5];
+  for (const std::string& r : rows) EXPECT_EQ(r.find("0.400000,3.1"), std::string::npos) << "the cut row is gone";
+
+  // Without append mode the files start again.
+  { RunOutputs fresh(dir); }
+  EXPECT_EQ(test::lines(readFile(dir + "/frames.csv")).size(), 1u);
 }

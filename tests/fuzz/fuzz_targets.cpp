@@ -6,6 +6,7 @@
 #include "livo/io/convert.hpp"
 #include "livo/io/estimator_messages.hpp"
 #include "livo/io/map_messages.hpp"
+#include "livo/io/resume_messages.hpp"
 #include "livo/map/map_file.hpp"
 #include "livo/sensors/camera_model.hpp"
 
@@ -60,12 +61,13 @@ Validation imuFrom(const livo::imu_t& m, ImuSample& o, const MessageLimits&) { r
 Validation scanFrom(const livo::lidar_scan_t& m, LidarScan& o, const MessageLimits& l) { return fromMsg(m, o, l); }
 Validation imageFrom(const livo::image_t& m, Image& o, const MessageLimits& l) { return fromMsg(m, o, l); }
 Validation frameFrom(const livo::frame_t& m, Frame& o, const MessageLimits& l) { return fromMsg(m, o, l); }
+Validation stateFrom(const livo::filter_state_t& m, FilterSnapshot& o, const MessageLimits&) { return fromMsg(m, o); }
 template <class Msg, class T>
 Validation plainFrom(const Msg& m, T& o, const MessageLimits& l) {
   return fromMsg(m, o, l);
 }
 
-constexpr int kTypes = 14;
+constexpr int kTypes = 16;
 
 std::vector<std::uint8_t> tagged(int type, const std::vector<std::uint8_t>& bytes) {
   std::vector<std::uint8_t> out{std::uint8_t(type)};
@@ -127,6 +129,8 @@ int fuzzMessages(const std::uint8_t* data, std::size_t size) {
     case 10: roundTrip<livo::estimator_stats_t, EstimatorStats>(d, n, "estimator_stats_t", plainFrom); break;
     case 11: roundTrip<livo::patch_t, VisualObservation>(d, n, "patch_t", plainFrom); break;
     case 12: roundTrip<livo::plane_t, SubmapPlane>(d, n, "plane_t", plainFrom); break;
+    case 14: roundTrip<livo::filter_state_t, FilterSnapshot>(d, n, "filter_state_t", stateFrom); break;
+    case 15: roundTrip<livo::resume_t, ResumeAnswer>(d, n, "resume_t", plainFrom); break;
     default: roundTrip<livo::visual_point_t, VisualPoint>(d, n, "visual_point_t", plainFrom); break;
   }
   return 0;
@@ -242,6 +246,17 @@ std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seeds(const std::
     out.push_back({"patch", tagged(11, encode(toMsg(seedObs())))});
     out.push_back({"plane", tagged(12, encode(toMsg(seedPlane())))});
     out.push_back({"visual_point", tagged(13, encode(toMsg(seedPoint())))});
+    FilterSnapshot fs;
+    fs.filter.state.utime = 8000;
+    fs.filter.P = initialCovariance();
+    out.push_back({"filter_state", tagged(14, encode(toMsg(fs)))});
+    ResumeAnswer ra;
+    ra.request_id = 9;
+    ra.have_state = true;
+    ra.snapshot = fs;
+    ra.imu = {imu};
+    ra.imu[0].utime = 8005;
+    out.push_back({"resume", tagged(15, encode(toMsg(ra)))});
   } else if (target == "config") {
     for (const char* name : {"avia.yaml", "sim_demo.yaml", "mid360.yaml"}) {
       std::ifstream f(std::string(LIVO_SOURCE_DIR) + "/config/" + name, std::ios::binary);
