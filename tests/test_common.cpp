@@ -150,6 +150,27 @@ TEST(Config, ReadsKeysAndKeepsDefaults) {
   EXPECT_NO_THROW(f.checkAllKeysUsed());
 }
 
+TEST(Config, EffectiveLinesNameEveryKeyAndDifferencesNameTheKeysThatDiffer) {
+  auto a = ConfigFile::parse("lio:\n  voxel_size_m: 0.4\n  T_imu_lidar: [1, 2, 3, 0, 0, 0, 1]\n", "a.yaml");
+  auto b = ConfigFile::parse("lio:\n  voxel_size_m: 0.5\n  max_layer: 3\n  T_imu_lidar: [1, 2, 3.5, 0, 0, 0, 1]\n",
+                             "b.yaml");
+  ToyLioConfig ca, cb;
+  ca.load(a.root().section("lio"));
+  cb.load(b.root().section("lio"));
+  const std::string la = a.effectiveLines(), lb = b.effectiveLines();
+  EXPECT_NE(la.find("lio.voxel_size_m=0.4\n"), std::string::npos) << la;
+  EXPECT_NE(la.find("lio.max_layer=2\n"), std::string::npos) << "defaults too:\n" << la;
+  EXPECT_TRUE(configDifferences(la, la).empty());
+  const std::vector<std::string> d = configDifferences(la, lb);
+  ASSERT_EQ(d.size(), 3u) << la << lb;
+  EXPECT_EQ(d[0].rfind("lio.T_imu_lidar: [1, 2, 3, 0, 0, 0, 1] here, [1, 2, 3.5, 0, 0, 0, 1] there", 0), 0u) << d[0];
+  EXPECT_EQ(d[1], "lio.max_layer: 2 here, 3 there");
+  EXPECT_EQ(d[2], "lio.voxel_size_m: 0.4 here, 0.5 there");
+  EXPECT_EQ(configDifferences(la, lb, {"lio.max_layer"}).size(), 2u) << "ignored keys";
+  EXPECT_EQ(configDifferences(la, lb, {}, 1).size(), 1u) << "at most max";
+  EXPECT_TRUE(configDifferences(la, "other.key=1\n").empty()) << "only keys both read";
+}
+
 TEST(Config, MissingRequiredKeyNamesKeyAndFile) {
   auto f = ConfigFile::parse("lio:\n  max_layer: 3\n", "rig.yaml");
   ToyLioConfig c;

@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -196,4 +197,32 @@ TEST(ChaosNetns, ExporterKilledContinuesItsFiles) {
   chaos("exporter", 4);
   const std::string logs = readFile(roomLog().dir + "/kill_exporter/exporter2.txt");
   EXPECT_NE(logs.find("livo-exporter: continuing "), std::string::npos) << logs;
+}
+
+TEST(ChaosNetns, AnEstimatorStartedWithAnotherRigExitsNamingTheKey) {
+  Netns ns;
+  if (!ns.ok) LIVO_SKIP() << ns.why;
+  const RoomLog& room = roomLog();
+  ASSERT_TRUE(room.ok) << room.error;
+  const std::string dir = room.dir + "/other_rig";
+  std::filesystem::create_directories(dir);
+  // The same rig with the LiDAR 5 cm further forward (a recalibration nobody told the map server about).
+  std::string text = readFile(room.rig);
+  const std::string from = "T_imu_lidar: [0.05,", to = "T_imu_lidar: [0.1,";
+  ASSERT_NE(text.find(from), std::string::npos) << text;
+  text.replace(text.find(from), from.size(), to);
+  std::ofstream(dir + "/rig.yaml") << text;
+  Child mapserver(ns.exec({kBin + "/livo-mapserver", "--config", room.rig, "--lcm-url", kUrl}), dir + "/mapserver.txt");
+  ASSERT_TRUE(waitUntil([&] { return readFile(dir + "/mapserver.txt").find(" on " + kUrl) != std::string::npos; }, 60));
+  Child estimator(ns.exec({kBin + "/livo-estimator", "--config", dir + "/rig.yaml", "--lcm-url", kUrl, "--idle-exit", "20"}),
+                  dir + "/estimator.txt");
+  EXPECT_EQ(estimator.wait(30), 1) << "a run error, at once (not at --idle-exit)\n" << readFile(dir + "/estimator.txt");
+  const std::string log = readFile(dir + "/estimator.txt");
+  EXPECT_NE(log.find("livo-estimator: error: the running map server's config differs from this one: lidar.T_imu_lidar: "
+                     "[0.1, 0.0, 0.05, 0.0, 0.0, 0.0, 1.0] here, [0.05, 0.0, 0.05, 0.0, 0.0, 0.0, 1.0] there"),
+            std::string::npos)
+      << log;
+  mapserver.signal(SIGINT);
+  EXPECT_EQ(mapserver.wait(30), 0);
+  EXPECT_NE(readFile(dir + "/mapserver.txt").find("an estimator with another config asked to resume"), std::string::npos);
 }

@@ -246,3 +246,29 @@ TEST(EstimatorOverMemq, FramesLostUpstreamGetTheirImuFromTheMapServer) {
   std::cout << "0.5 s of frames lost: at most " << worst * 100 << " cm from the uninterrupted single process\n";
   EXPECT_LE(worst, 0.009);  // measured 0.43 cm (2026-12-06)
 }
+
+TEST(EstimatorOverMemq, AnEstimatorWithAnotherConfigIsRefusedNamingTheKey) {
+  const livo_test::SimFrames& sf = roomFrames();
+  std::ostringstream log;
+  LcmNode lcm("memq://", "test", &log);
+  MapService service = makeService(sf.cfg);
+  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  server.setConfigLines("lidar.model=avia\nmap.memory_cap_mb=512\nvoxel_map.voxel_size_m=0.5\n");
+  EstimatorNodeConfig same = fastConfig(), other = fastConfig();
+  same.config_lines = "estimator.map_timeout_ms=100\nlidar.model=avia\nmap.memory_cap_mb=0\nvoxel_map.voxel_size_m=0.5\n";
+  other.config_lines = "lidar.model=mid360\nvoxel_map.voxel_size_m=1\n";
+  // (Both stay alive: an LcmNode's handlers point at them.)
+  EstimatorNode agreeing(lcm, sf.cfg, same, ChannelConfig{}, &log);
+  EXPECT_NO_THROW(feed(lcm, agreeing, std::vector<Frame>(sf.frames.begin(), sf.frames.begin() + 2)))
+      << "keys only one side reads, and the map server's own memory cap, do not count";
+  EstimatorNode est(lcm, sf.cfg, other, ChannelConfig{}, &log);
+  try {
+    feed(lcm, est, std::vector<Frame>(sf.frames.begin() + 2, sf.frames.begin() + 3));
+    FAIL() << "expected the estimator to refuse the map server of another rig";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("lidar.model: mid360 here, avia there"), std::string::npos) << what;
+    EXPECT_NE(what.find("voxel_map.voxel_size_m: 1 here, 0.5 there"), std::string::npos) << what;
+  }
+  EXPECT_NE(log.str().find("livo-mapserver: error: an estimator with another config"), std::string::npos) << log.str();
+}

@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     node_cfg.load(root.section("estimator"));
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "estimator", "lio", "vio", "selector"});
+    node_cfg.config_lines = file.effectiveLines();
     pipe_cfg.visual_mode = visual_mode;  // command-line settings: PipelineConfig has no keys for them
     pipe_cfg.threads = threads;
     if (args.print_config) {

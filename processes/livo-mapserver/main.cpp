@@ -44,12 +44,14 @@ int main(int argc, char** argv) {
 
   PipelineConfig pipe_cfg;
   ChannelConfig channels;
+  std::string config_lines;
   try {
     ConfigFile file = ConfigFile::load(args.config);
     const ConfigNode root = file.root();
     pipe_cfg.load(root);
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "map", "voxel_map"});
+    config_lines = file.effectiveLines();
     if (args.print_config) {
       if (cap_mb >= 0) file.overrideEffective("map.memory_cap_mb", cap_mb);
       printConfig(std::cout, cl.program(), file, "--map-mode " + map_mode);
@@ -76,6 +78,7 @@ int main(int argc, char** argv) {
     const auto max_resume_imu = std::size_t(std::clamp(30.0 * pipe_cfg.lio.imu.rate_hz, 100.0,
                                                         double(lcm.limits().max_imu_per_frame)));
     MapServerNode node(lcm, service, channels, &std::cerr, 1.0, max_resume_imu);
+    node.setConfigLines(config_lines);
     std::cerr << "livo-mapserver: " << map_mode << " map";
     if (service.map().stats().cap_bytes > 0) std::cerr << ", cap " << service.map().stats().cap_bytes / (1 << 20) << " MiB";
     std::cerr << "; " << channels.map_query << " -> " << channels.submap << ", " << channels.map_update << " on " << url

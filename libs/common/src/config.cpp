@@ -2,6 +2,7 @@
 
 #include "livo/common/so3.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -149,6 +150,45 @@ std::string ConfigFile::effectiveYaml() const {
   out.SetMapFormat(YAML::Block);
   root.emit(out);
   return std::string(out.c_str()) + "\n";
+}
+
+std::string ConfigFile::effectiveLines() const {
+  std::string out;
+  for (const auto& [key, node] : state_->effective) {  // std::map: sorted by key
+    YAML::Emitter e;
+    e.SetMapFormat(YAML::Flow);
+    e.SetSeqFormat(YAML::Flow);
+    e << node;
+    std::string v = e.c_str();
+    for (char& c : v)
+      if (c == '\n') c = ' ';
+    out += key + "=" + v + "\n";
+  }
+  return out;
+}
+
+std::vector<std::string> configDifferences(const std::string& here, const std::string& there,
+                                           const std::vector<std::string>& ignore, std::size_t max) {
+  const auto parse = [](const std::string& text) {
+    std::map<std::string, std::string> kv;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+      const std::size_t eq = line.find('=');
+      if (eq != std::string::npos && eq > 0) kv[line.substr(0, eq)] = line.substr(eq + 1);
+    }
+    return kv;
+  };
+  const auto a = parse(here), b = parse(there);
+  std::vector<std::string> diff;
+  for (const auto& [key, va] : a) {
+    if (std::find(ignore.begin(), ignore.end(), key) != ignore.end()) continue;
+    const auto it = b.find(key);
+    if (it == b.end() || it->second == va) continue;
+    if (diff.size() >= max) break;
+    diff.push_back(key + ": " + va + " here, " + it->second + " there");
+  }
+  return diff;
 }
 
 void ConfigFile::overrideEffective(const std::string& dotted_key, double value) {

@@ -173,7 +173,9 @@ bool walkEstStats(Walker& w, const std::string& f) { return w.skip(fixedSize<liv
 bool walkMapStats(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::map_stats_t>(), f); }
 bool walkPlane(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::plane_t>(), f); }
 bool walkFilterState(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::filter_state_t>(), f); }
-bool walkResumeRequest(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::resume_request_t>(), f); }
+bool walkResumeRequest(Walker& w, const std::string& f) {
+  return w.skip(8, f + ".request_id") && w.string(f + ".config");
+}
 
 bool walkResume(Walker& w, const std::string& f) {
   std::int32_t n = 0;
@@ -181,7 +183,7 @@ bool walkResume(Walker& w, const std::string& f) {
   // request_id, have_state, state; num_imu; imu; imu_dropped
   return w.skip(8 + 1, f + ".header") && w.skip(fixedSize<livo::filter_state_t>(), f + ".state") &&
          w.count(f + ".num_imu", w.lim().max_imu_per_frame, imu, n) && w.skip(std::size_t(n) * imu, f + ".imu") &&
-         w.skip(8, f + ".imu_dropped");
+         w.skip(8, f + ".imu_dropped") && w.string(f + ".config_mismatch");
 }
 
 template <class Msg, class WalkFn>

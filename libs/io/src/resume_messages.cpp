@@ -89,6 +89,7 @@ livo::resume_t toMsg(const ResumeAnswer& a) {
   m.imu.reserve(a.imu.size());
   for (const ImuSample& s : a.imu) m.imu.push_back(toMsg(s));
   m.imu_dropped = a.imu_dropped;
+  m.config_mismatch = a.config_mismatch;
   return m;
 }
 
@@ -112,6 +113,7 @@ Validation fromMsg(const livo::resume_t& m, ResumeAnswer& out, const MessageLimi
     a.imu.push_back(s);
   }
   a.imu_dropped = m.imu_dropped;
+  a.config_mismatch = m.config_mismatch;
   out = std::move(a);
   return Validation::ok();
 }

@@ -78,6 +78,7 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
     resume_request_id_ = newRequestId();
     livo::resume_request_t q{};
     q.request_id = resume_request_id_;
+    q.config = cfg_.config_lines;
     since_resume_request_.restart();
     lcm_.publish(channels_.resume_request, q);
   } else {
@@ -93,6 +94,7 @@ void EstimatorNode::startFrom(const Frame& first) {
     if (left <= 0) break;
     lcm_.handleOnce(std::max(1, int(left)));
   }
+  refuseOtherConfig();
   std::ostringstream why;
   why << std::fixed << std::setprecision(3);
   if (!resume_answered_) {
@@ -167,6 +169,7 @@ void EstimatorNode::send(const MapUpdate& u) {
 
 std::size_t EstimatorNode::poll() {
   if (in_poll_) return 0;  // request() handles messages: never re-enter
+  refuseOtherConfig();     // as soon as the map server's answer says so, not at the first frame
   in_poll_ = true;
   std::size_t n = 0;
   while (!queue_.empty()) {
@@ -189,6 +192,7 @@ bool EstimatorNode::askMapServer() {
   resume_answered_ = false;
   livo::resume_request_t q{};
   q.request_id = resume_request_id_;
+  q.config = cfg_.config_lines;
   since_resume_request_.restart();
   lcm_.publish(channels_.resume_request, q);
   while (!resume_answered_) {
@@ -199,6 +203,12 @@ bool EstimatorNode::askMapServer() {
   return resume_answered_;
 }
 
+void EstimatorNode::refuseOtherConfig() const {
+  if (resume_answered_ && !resume_.config_mismatch.empty())
+    throw std::runtime_error("the running map server's config differs from this one: " + resume_.config_mismatch +
+                             " (another rig? start every process of the suite with the same --config)");
+}
+
 bool EstimatorNode::bridgeImuGap(Frame& frame) {
   const Utime t_state = pipeline_.odometry().state().utime;
   const double gap = toSeconds(frame.imu.front().utime - t_state);
@@ -207,9 +217,11 @@ bool EstimatorNode::bridgeImuGap(Frame& frame) {
   os << std::fixed << std::setprecision(3) << "livo-estimator: the frame at t " << toSeconds(frame.utime)
      << " s has no IMU sample for the first " << gap << " s after the last state (frames lost upstream): ";
   bool bridged = false;
+  const bool answered = cfg_.resume_wait_ms > 0 && askMapServer();
+  refuseOtherConfig();
   if (cfg_.resume_wait_ms <= 0) {
     os << "resume_wait_ms is 0, not asked";
-  } else if (!askMapServer()) {
+  } else if (!answered) {
     os << "no answer from the map server; the filter holds the first sample across the gap";
   } else if (!resume_.have_state || resume_.snapshot.filter.state.utime != t_state) {
     os << "the map server holds samples after another state; the filter holds the first sample across the gap";

@@ -60,6 +60,13 @@ Validation MapServerNode::onResumeRequest(const livo::resume_request_t& m) {
   ResumeAnswer a;
   a.request_id = m.request_id;
   a.have_state = have_state_;
+  if (!config_lines_.empty() && !m.config.empty()) {
+    // "here" is the estimator's side in the message it reads.
+    for (const std::string& d : configDifferences(m.config, config_lines_, {"map.memory_cap_mb"}))
+      a.config_mismatch += (a.config_mismatch.empty() ? "" : "; ") + d;
+    if (!a.config_mismatch.empty() && log_)
+      *log_ << "livo-mapserver: error: an estimator with another config asked to resume: " << a.config_mismatch << "\n";
+  }
   if (have_state_) {
     a.snapshot = last_state_;
     a.imu.assign(imu_since_.begin(), imu_since_.end());

@@ -52,6 +52,10 @@ class ConfigFile {
   /// Sets the effective value of a dotted key, for a command-line option that overrides a config key
   /// (livo-mapserver --memory-cap-mb: map.memory_cap_mb).
   void overrideEffective(const std::string& dotted_key, double value);
+  /// The effective configuration one key per line, "dotted.key=value" (sequences and maps in YAML flow
+  /// style), sorted by key: what two processes compare to find out whether they run the same rig
+  /// (configDifferences).
+  std::string effectiveLines() const;
 
  private:
   struct State;
@@ -59,6 +63,11 @@ class ConfigFile {
   std::shared_ptr<State> state_;
   friend class ConfigNode;
 };
+
+/// The keys present in both effectiveLines() texts whose values differ, each as
+/// "key: VALUE_A here, VALUE_B there", except the keys in `ignore`; at most `max` of them.
+std::vector<std::string> configDifferences(const std::string& here, const std::string& there,
+                                           const std::vector<std::string>& ignore = {}, std::size_t max = 5);
 
 /// A view on one YAML map (the document root or a section) that records what it reads.
 class ConfigNode {

@@ -29,6 +29,9 @@ struct ResumeAnswer {
   FilterSnapshot snapshot;          ///< valid when have_state
   std::vector<ImuSample> imu;       ///< after snapshot's time, time ordered
   std::int64_t imu_dropped = 0;     ///< samples after it the map server no longer held
+  /// The keys whose values differ between the asking estimator's config and the map server's
+  /// ("key: A here, B there; ..."); empty when they agree.
+  std::string config_mismatch;
 };
 
 /// The state is symmetrised ((P + P^T) / 2) on the way out.

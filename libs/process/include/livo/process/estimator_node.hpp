@@ -42,6 +42,10 @@ struct EstimatorNodeConfig {
   int max_queued_frames = 100;     ///< older frames beyond this are dropped (counted, warned)
   double resume_wait_ms = 1000.0;  ///< at start, wait this long for the map server's last state (0: never resume)
   double resume_max_gap_s = 10.0;  ///< resume only when the first frame is at most this long after that state
+  /// Not a key: the process's effective config (ConfigFile::effectiveLines()), sent with each resume
+  /// request; a map server running another config answers with the keys that differ, and the node
+  /// throws std::runtime_error naming them (livo-estimator exits).
+  std::string config_lines;
   void load(const ConfigNode& section);  ///< section `estimator`
 };
 
@@ -84,6 +88,8 @@ class EstimatorNode : public MapClient {
   /// and resumes from it when it fits the frame.
   void startFrom(const Frame& first);
   static std::int64_t newRequestId();
+  /// Throws std::runtime_error naming the keys when the map server answered that its config differs.
+  void refuseOtherConfig() const;
   /// Publishes a resume request and waits up to resume_wait_ms for the answer (in resume_).
   bool askMapServer();
   /// `frame`'s IMU begins later than the filter state: prepends the map server's samples of the gap.

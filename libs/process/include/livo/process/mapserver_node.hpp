@@ -42,6 +42,9 @@ class MapServerNode {
     std::uint64_t resume_imu_dropped = 0; ///< IMU samples after the last state dropped (buffer full)
   };
   const Counters& counters() const { return counters_; }
+  /// The process's effective config (ConfigFile::effectiveLines()): a resume request whose config
+  /// differs in a key both read (except map.memory_cap_mb, the map server's own) gets the differences.
+  void setConfigLines(std::string lines) { config_lines_ = std::move(lines); }
   std::string progressLine() const;
   std::string summary() const;
 
@@ -67,6 +70,7 @@ class MapServerNode {
   FilterSnapshot last_state_;
   std::deque<ImuSample> imu_since_;  ///< samples after last_state_'s time (or the newest, before any state)
   std::uint64_t imu_dropped_since_ = 0;
+  std::string config_lines_;
 };
 
 }  // namespace livo
