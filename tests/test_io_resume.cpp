@@ -163,6 +163,8 @@ TEST(ResumeMessages, PrecheckRefusesACountTheBytesCannotHold) {
   expectError(decode(buf.data(), buf.size(), d, big), "resume_t.num_imu", "bytes remain");
   livo::resume_t e{};
   auto short_buf = encode(toMsg(randAnswer(3)));
-  short_buf.resize(short_buf.size() - 1);
+  short_buf.resize(short_buf.size() - 1);  // the last byte of config_mismatch (its NUL)
+  expectError(decode(short_buf.data(), short_buf.size(), e), "resume_t.config_mismatch", "only 0 bytes remain");
+  short_buf.resize(short_buf.size() - 5);  // then the string's length and the last byte of imu_dropped
   expectError(decode(short_buf.data(), short_buf.size(), e), "resume_t.imu_dropped", "message ends early");
 }

@@ -168,7 +168,9 @@ TEST_F(StreetMemory, HybridEndsAtMostHalfOfGlobal) {
   std::printf("stats.json map.bytes: hybrid %.1f MiB, global %.1f MiB (ratio %.3f)\n", hybrid / kMiB, global / kMiB,
               hybrid / global);
   EXPECT_GT(hybrid, 0.0);
-  EXPECT_LE(hybrid, 0.5 * global);
+  EXPECT_LE(hybrid, 0.5 * global);  // the claim
+  // Measured 2026-12-06: 55.6 / 915.6 MiB = 0.061 (0.063 on 2026-12-04); about twice that.
+  EXPECT_LE(hybrid, 0.12 * global);
 }
 
 TEST_F(StreetMemory, CappedHybridStaysUnderTheCapInEveryFrame) {
@@ -188,6 +190,9 @@ TEST_F(StreetMemory, CappedHybridStaysUnderTheCapInEveryFrame) {
 }
 
 TEST_F(StreetMemory, EveryRunTracksTheLoop) {
+  // ATE over the 2102 m loop, measured 2026-12-06: hybrid 5.0 cm, global 5.1 cm, capped 7.4 cm; bounds
+  // about twice those (0.1 % of the path, the claim, is 2.1 m).
+  const std::map<std::string, double> bound{{"hybrid", 0.10}, {"global", 0.10}, {"capped", 0.15}};
   for (const char* name : {"hybrid", "global", "capped"}) {
     SCOPED_TRACE(name);
     const RunResult& r = result(name);
@@ -196,6 +201,7 @@ TEST_F(StreetMemory, EveryRunTracksTheLoop) {
     EXPECT_GT(r.eval.path_length_m, 2000.0);
     EXPECT_GT(double(r.eval.matched), 0.98 * double(r.map_bytes.size()));
     EXPECT_LT(r.eval.ate.translation_m.rmse, 0.001 * r.eval.path_length_m);
+    EXPECT_LT(r.eval.ate.translation_m.rmse, bound.at(name));
   }
 }
 

@@ -70,11 +70,13 @@ Validation checkStats(const livo::estimator_stats_t& m) {
   LIVO_MSG_CHECK(nonNegative(m.map_wait_ms, "map_wait_ms"));
   LIVO_MSG_CHECK(nonNegative(m.total_ms, "total_ms"));
   LIVO_MSG_CHECK(nonNegative(m.sigma_min, "sigma_min"));
+  LIVO_MSG_CHECK(nonNegative(m.lag_ms, "lag_ms"));
   const std::pair<std::int32_t, const char*> counts[] = {{m.n_points, "n_points"},
                                                          {m.n_planes_matched, "n_planes_matched"},
                                                          {m.n_visual_points, "n_visual_points"},
                                                          {m.n_longterm_visual_points, "n_longterm_visual_points"},
-                                                         {m.dropped_points, "dropped_points"}};
+                                                         {m.dropped_points, "dropped_points"},
+                                                         {m.frames_shed, "frames_shed"}};
   for (const auto& c : counts)
     if (c.first < 0) return Validation::fail(std::string(c.second) + ": negative count " + std::to_string(c.first));
   if (!std::isfinite(m.time_offset_s) || std::abs(m.time_offset_s) > 1e4)
@@ -194,6 +196,9 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.time_offset_s = s.time_offset_s;
   m.time_offset_sigma_s = s.time_offset_sigma_s;
   m.dropped_points = s.dropped_points;
+  m.lag_ms = s.lag_ms;
+  m.frames_shed = s.frames_shed;
+  m.image_shed = s.image_shed;
   return m;
 }
 
@@ -223,6 +228,9 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.time_offset_s = m.time_offset_s;
   out.time_offset_sigma_s = m.time_offset_sigma_s;
   out.dropped_points = m.dropped_points;
+  out.lag_ms = m.lag_ms;
+  out.frames_shed = m.frames_shed;
+  out.image_shed = m.image_shed != 0;
   return Validation::ok();
 }
 

@@ -23,7 +23,9 @@ void EstimatorNodeConfig::load(const ConfigNode& s) {
       .get("fast_timeouts_after", fast_timeouts_after)
       .get("max_queued_frames", max_queued_frames)
       .get("resume_wait_ms", resume_wait_ms)
-      .get("resume_max_gap_s", resume_max_gap_s);
+      .get("resume_max_gap_s", resume_max_gap_s)
+      .get("shed_images_queued", shed_images_queued)
+      .get("shed_frames_queued", shed_frames_queued);
   s.check(map_timeout_ms > 0 && map_timeout_ms <= 60000, "map_timeout_ms", "must be in (0, 60000]");
   s.check(fast_timeout_ms > 0 && fast_timeout_ms <= map_timeout_ms, "fast_timeout_ms",
           "must be in (0, map_timeout_ms]");
@@ -31,22 +33,27 @@ void EstimatorNodeConfig::load(const ConfigNode& s) {
   s.check(max_queued_frames >= 1 && max_queued_frames <= 100000, "max_queued_frames", "must be in [1, 100000]");
   s.check(resume_wait_ms >= 0 && resume_wait_ms <= 60000, "resume_wait_ms", "must be in [0, 60000]");
   s.check(resume_max_gap_s > 0 && resume_max_gap_s <= 3600, "resume_max_gap_s", "must be in (0, 3600]");
+  s.check(shed_images_queued >= 0, "shed_images_queued", "must be >= 0");
+  s.check(shed_frames_queued >= 1 && shed_frames_queued <= max_queued_frames, "shed_frames_queued",
+          "must be in [1, max_queued_frames]");
 }
 
 EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNodeConfig cfg,
                              const ChannelConfig& channels, std::ostream* log)
     : lcm_(lcm), cfg_(cfg), channels_(channels), log_(log), pipeline_(pipeline), map_(pipeline, *this) {
   lcm_.subscribe<livo::frame_t>(channels_.frame, [this](const livo::frame_t& m) {
-    std::pair<Frame, std::size_t> item;
-    Validation v = fromMsg(m, item.first, lcm_.limits(), &item.second);
+    Queued item;
+    Validation v = fromMsg(m, item.frame, lcm_.limits(), &item.nonfinite);
     if (!v) return v;
-    if (int(queue_.size()) >= cfg_.max_queued_frames) {
-      queue_.pop_front();
+    item.arrived = std::chrono::steady_clock::now();
+    queue_.push_back(std::move(item));
+    while (int(queue_.size()) > cfg_.max_queued_frames) {
+      dropOldest();
       if (shouldWarn(++counters_.frames_dropped) && log_)
         *log_ << "livo-estimator: warning: frame queue full (" << cfg_.max_queued_frames
-              << "), dropped the oldest frame (" << counters_.frames_dropped << " so far)\n";
+              << "), dropped the oldest frame, its IMU merged into the next (" << counters_.frames_dropped
+              << " so far)\n";
     }
-    queue_.push_back(std::move(item));
     return Validation::ok();
   });
   lcm_.subscribe<livo::submap_t>(channels_.submap, [this](const livo::submap_t& m) {
@@ -173,9 +180,19 @@ std::size_t EstimatorNode::poll() {
   in_poll_ = true;
   std::size_t n = 0;
   while (!queue_.empty()) {
-    std::pair<Frame, std::size_t> item = std::move(queue_.front());
+    // Overload: whole frames first beyond shed_frames_queued (IMU kept), then the image of a frame
+    // while the LiDAR holds on its own.
+    while (int(queue_.size()) - 1 > cfg_.shed_frames_queued) {
+      dropOldest();
+      if (shouldWarn(++counters_.frames_shed) && log_)
+        *log_ << "livo-estimator: warning: " << queue_.size() << " frames waiting, shed the oldest (IMU kept; "
+              << counters_.frames_shed << " so far)\n";
+    }
+    const bool shed_image = int(queue_.size()) - 1 > cfg_.shed_images_queued && !last_degenerate_ &&
+                            queue_.front().frame.has_image;
+    Queued item = std::move(queue_.front());
     queue_.pop_front();
-    processFrame(item.first, item.second);
+    processFrame(item, shed_image);
     ++n;
   }
   in_poll_ = false;
@@ -240,7 +257,41 @@ bool EstimatorNode::bridgeImuGap(Frame& frame) {
   return bridged;
 }
 
-void EstimatorNode::processFrame(const Frame& in, std::size_t nonfinite) {
+void EstimatorNode::dropOldest() {
+  if (queue_.size() < 2) return;
+  Queued& old = queue_[0];
+  Queued& next = queue_[1];
+  std::vector<ImuSample> imu;
+  const Utime first_next = next.frame.imu.empty() ? next.frame.utime : next.frame.imu.front().utime;
+  for (const ImuSample& s : old.frame.imu)
+    if (s.utime < first_next) imu.push_back(s);
+  imu.insert(imu.end(), next.frame.imu.begin(), next.frame.imu.end());
+  next.frame.imu = std::move(imu);
+  next.nonfinite += old.nonfinite;
+  next.shed_before += old.shed_before + 1;
+  queue_.pop_front();
+}
+
+double EstimatorNode::medianLagMs() const {
+  std::uint64_t n = 0;
+  for (std::uint32_t c : lag_histogram_ms_) n += c;
+  if (n == 0) return -1.0;
+  std::uint64_t seen = 0;
+  for (std::size_t i = 0; i < lag_histogram_ms_.size(); ++i) {
+    seen += lag_histogram_ms_[i];
+    if (2 * seen >= n) return double(i) + 0.5;
+  }
+  return double(lag_histogram_ms_.size());
+}
+
+void EstimatorNode::processFrame(Queued& q, bool shed_image) {
+  const std::size_t nonfinite = q.nonfinite;
+  if (shed_image) {
+    q.frame.has_image = false;
+    q.frame.image = Image();
+    ++counters_.images_shed;
+  }
+  const Frame& in = q.frame;
   bool resumed_now = false;
   if (!started_) {
     startFrom(in);
@@ -262,7 +313,15 @@ void EstimatorNode::processFrame(const Frame& in, std::size_t nonfinite) {
   ++counters_.frames;
   counters_.last_utime = frame.utime;
 
-  lcm_.publish(channels_.estimator_stats, toMsg(frameStats(f, frame.utime, std::int64_t(counters_.frames - 1), nonfinite)));
+  last_degenerate_ = f.degenerate;
+  EstimatorStats st = frameStats(f, frame.utime, std::int64_t(counters_.frames - 1), nonfinite);
+  st.lag_ms = float(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - q.arrived).count());
+  st.frames_shed = q.shed_before;
+  st.image_shed = shed_image;
+  if (lag_histogram_ms_.empty()) lag_histogram_ms_.assign(10001, 0);  // 0..10 s
+  ++lag_histogram_ms_[std::min<std::size_t>(std::size_t(st.lag_ms), lag_histogram_ms_.size() - 1)];
+  max_lag_ms_ = std::max(max_lag_ms_, double(st.lag_ms));
+  lcm_.publish(channels_.estimator_stats, toMsg(st));
   if (!f.lio.initialized) {  // no pose yet: say why, once per second of sensor time
     if (log_ && (last_wait_said_ < 0 || toSeconds(frame.utime - last_wait_said_) >= 1.0)) {
       last_wait_said_ = frame.utime;
@@ -318,6 +377,9 @@ std::string EstimatorNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
      << counters_.odometry_published << "\n";
+  os << "load: lag ms (arrival -> outputs) median " << medianLagMs() << ", max " << max_lag_ms_ << "; frames shed "
+     << counters_.frames_shed << " (more than " << cfg_.shed_frames_queued << " waiting), images shed "
+     << counters_.images_shed << " (more than " << cfg_.shed_images_queued << " waiting, LiDAR not degenerate)\n";
   os << "start: " << (start_report_.empty() ? "no frame" : start_report_) << "; IMU gaps " << counters_.imu_gaps
      << " (samples from the map server " << counters_.imu_bridged_samples << ")\n";
   os << "map queries " << counters_.queries << ": answered " << counters_.answered << ", timeouts "

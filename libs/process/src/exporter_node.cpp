@@ -47,6 +47,9 @@ void ExporterNode::onStats(const EstimatorStats& s) {
   pending_[s.utime].stats = s;
   counters_["estimator_map_timeouts"] += s.map_timeout;
   counters_["estimator_dropped_points"] += s.dropped_points;
+  counters_["estimator_frames_shed"] += s.frames_shed;
+  counters_["estimator_images_shed"] += s.image_shed;
+  counters_["estimator_max_lag_ms"] = std::max(counters_["estimator_max_lag_ms"], double(s.lag_ms));
   flushFrames(false);
 }
 

@@ -67,6 +67,10 @@ struct EstimatorStats {
   bool has_time_offset = false;  ///< camera.estimate_time_offset: the camera's time offset estimate, s
   double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
   std::int32_t dropped_points = 0;    ///< NaN / out of range / blind
+  // Load (livo-estimator; EstimatorNode sheds under overload).
+  float lag_ms = 0.f;                 ///< frame arrival -> outputs published, wall clock
+  std::int32_t frames_shed = 0;       ///< frames dropped just before this one (their IMU merged into it)
+  bool image_shed = false;            ///< the frame's image was left out
 };
 
 // ---- struct -> message. RegisteredScan with intensity of another size than points, or rgb neither

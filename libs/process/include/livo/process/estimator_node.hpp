@@ -28,6 +28,7 @@
 #include "livo/io/resume_messages.hpp"
 #include "livo/process/lcm_node.hpp"
 
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <ostream>
@@ -40,6 +41,12 @@ struct EstimatorNodeConfig {
   double fast_timeout_ms = 20.0;   ///< wait after fast_timeouts_after timeouts in a row, ms
   int fast_timeouts_after = 3;
   int max_queued_frames = 100;     ///< older frames beyond this are dropped (counted, warned)
+  /// Overload: with more than this many frames waiting behind the next one, and the last frame's LiDAR
+  /// not degenerate, the next frame's image is left out (the visual update is the most expensive step).
+  int shed_images_queued = 2;
+  /// Overload: while more than this many frames wait, the oldest is dropped and its IMU samples merged
+  /// into the next (the IMU is never shed). At most max_queued_frames.
+  int shed_frames_queued = 10;
   double resume_wait_ms = 1000.0;  ///< at start, wait this long for the map server's last state (0: never resume)
   double resume_max_gap_s = 10.0;  ///< resume only when the first frame is at most this long after that state
   /// Not a key: the process's effective config (ConfigFile::effectiveLines()), sent with each resume
@@ -65,7 +72,9 @@ class EstimatorNode : public MapClient {
 
   struct Counters {
     std::uint64_t frames = 0;             ///< processed
-    std::uint64_t frames_dropped = 0;     ///< queue overflow
+    std::uint64_t frames_dropped = 0;     ///< queue full (max_queued_frames), IMU merged into the next
+    std::uint64_t frames_shed = 0;        ///< beyond shed_frames_queued, IMU merged into the next
+    std::uint64_t images_shed = 0;        ///< beyond shed_images_queued on non-degenerate frames
     std::uint64_t odometry_published = 0;
     std::uint64_t queries = 0, timeouts = 0, late_submaps = 0, invalid_submaps = 0;
     std::uint64_t query_bytes = 0, submap_bytes = 0, update_bytes = 0;
@@ -83,7 +92,14 @@ class EstimatorNode : public MapClient {
   std::string summary() const;
 
  private:
-  void processFrame(const Frame& f, std::size_t nonfinite);
+  struct Queued {
+    Frame frame;
+    std::size_t nonfinite = 0;
+    std::chrono::steady_clock::time_point arrived;
+    int shed_before = 0;  ///< frames dropped in front of this one (their IMU is in this one's)
+  };
+  /// Runs the pipeline on a frame (its image left out with `shed_image`) and publishes its outputs.
+  void processFrame(Queued& q, bool shed_image);
   /// Before the first frame: waits (up to resume_wait_ms since the request) for the map server's answer
   /// and resumes from it when it fits the frame.
   void startFrom(const Frame& first);
@@ -101,7 +117,14 @@ class EstimatorNode : public MapClient {
   std::ostream* log_;
   FramePipeline pipeline_;
   RemoteMap map_;  ///< the map server, through request() / send()
-  std::deque<std::pair<Frame, std::size_t>> queue_;
+  /// Drops the oldest queued frame, merging its IMU samples (and counts) into the next one.
+  void dropOldest();
+  std::deque<Queued> queue_;
+  bool last_degenerate_ = false;
+  std::vector<std::uint32_t> lag_histogram_ms_;  ///< 1 ms bins (the last bin holds everything beyond)
+  double max_lag_ms_ = 0.0;
+  /// Median of the lag histogram, ms (-1 before any frame).
+  double medianLagMs() const;
   bool in_poll_ = false;
   // Pending request.
   std::int64_t waiting_for_ = -1;
