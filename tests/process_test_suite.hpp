@@ -15,17 +15,23 @@
 
 namespace livo::test {
 
-/// config/sim/demo.yaml simulated for `duration_s` into `dir` (demo.lcm, gt.tum, rig.yaml).
-struct SimulatedDemo {
+/// config/sim/NAME.yaml simulated for `duration_s` into `dir` (NAME.lcm, gt.tum, rig.yaml).
+struct SimulatedScenario {
   std::string dir, log, gt, rig, error;
   bool ok = false;
-  SimulatedDemo(const std::string& d, double duration_s) : dir(d), log(d + "/demo.lcm"), gt(d + "/gt.tum"), rig(d + "/rig.yaml") {
-    const std::string cmd = kBin + "/livo-sim --scenario " + std::string(LIVO_SOURCE_DIR) + "/config/sim/demo.yaml --out " +
+  SimulatedScenario(const std::string& d, const std::string& name, double duration_s)
+      : dir(d), log(d + "/" + name + ".lcm"), gt(d + "/gt.tum"), rig(d + "/rig.yaml") {
+    const std::string cmd = kBin + "/livo-sim --scenario " + std::string(LIVO_SOURCE_DIR) + "/config/sim/" + name + ".yaml --out " +
                             log + " --gt " + gt + " --rig " + rig + " --duration " + std::to_string(duration_s) +
                             " --quiet > " + dir + "/sim.txt 2>&1";
     ok = std::system(cmd.c_str()) == 0;
     if (!ok) error = "livo-sim failed: " + readFile(dir + "/sim.txt");
   }
+};
+
+/// config/sim/demo.yaml simulated for `duration_s` into `dir` (demo.lcm, gt.tum, rig.yaml).
+struct SimulatedDemo : SimulatedScenario {
+  SimulatedDemo(const std::string& d, double duration_s) : SimulatedScenario(d, "demo", duration_s) {}
 };
 
 /// The four processes in `ns`, logs in `out`; each has subscribed once the constructor returns.

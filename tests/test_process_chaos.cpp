@@ -12,8 +12,7 @@
 #include "livo/eval/evaluate.hpp"
 #include "livo/eval/tum.hpp"
 
-#include "process_test_children.hpp"
-#include "process_test_files.hpp"
+#include "process_test_suite.hpp"
 
 #include "test_skip.hpp"
 
@@ -42,25 +41,10 @@ namespace {
 
 constexpr double kLogSeconds = 15.0;  // of the room scenario
 
-struct RoomLog {
-  std::string dir, log, gt, rig, error;
-  bool ok = false;
-};
+using RoomLog = test::SimulatedScenario;
 
 const RoomLog& roomLog() {
-  static RoomLog r = [] {
-    RoomLog o;
-    o.dir = test::tempDir("chaos");
-    o.log = o.dir + "/room.lcm";
-    o.gt = o.dir + "/gt.tum";
-    o.rig = o.dir + "/rig.yaml";
-    const std::string cmd = kBin + "/livo-sim --scenario " + std::string(LIVO_SOURCE_DIR) + "/config/sim/room.yaml --out " +
-                            o.log + " --gt " + o.gt + " --rig " + o.rig + " --duration " + std::to_string(kLogSeconds) +
-                            " --quiet > " + o.dir + "/sim.txt 2>&1";
-    o.ok = std::system(cmd.c_str()) == 0;
-    if (!o.ok) o.error = "livo-sim failed: " + readFile(o.dir + "/sim.txt");
-    return o;
-  }();
+  static const RoomLog r(test::tempDir("chaos"), "room", kLogSeconds);
   return r;
 }
 

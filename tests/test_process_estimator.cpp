@@ -57,6 +57,15 @@ void feed(LcmNode& lcm, EstimatorNode& node, const std::vector<Frame>& frames) {
   }
 }
 
+/// A memq bus with a map server on it (the estimators under test join it).
+struct MemqSuite {
+  std::ostringstream log;
+  LcmNode lcm{"memq://", "test", &log};
+  MapService service;
+  MapServerNode server;
+  explicit MemqSuite(const PipelineConfig& cfg) : service(makeService(cfg)), server(lcm, service, ChannelConfig{}, &log) {}
+};
+
 EstimatorNodeConfig fastConfig() {
   EstimatorNodeConfig c;
   c.map_timeout_ms = 100;  // wall clock: answers that come are delivered in the same call (memq)
@@ -68,10 +77,11 @@ EstimatorNodeConfig fastConfig() {
 
 TEST(EstimatorOverMemq, RoundTripGivesTheSingleProcessTrajectory) {
   const livo_test::SimFrames& sf = roomFrames();
-  std::ostringstream log;
-  LcmNode lcm("memq://", "test", &log);
-  MapService service = makeService(sf.cfg);
-  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  MemqSuite bus(sf.cfg);
+  std::ostringstream& log = bus.log;
+  LcmNode& lcm = bus.lcm;
+  MapService& service = bus.service;
+  MapServerNode& server = bus.server;
   EstimatorNode est(lcm, sf.cfg, EstimatorNodeConfig{}, ChannelConfig{}, &log);
   Outputs out(lcm);
   feed(lcm, est, sf.frames);
@@ -200,10 +210,10 @@ double worstToSingle(const std::vector<OdometryOutput>& odom, const Trajectory& 
 
 TEST(EstimatorOverMemq, ARestartedEstimatorResumesFromTheMapServersState) {
   const livo_test::SimFrames& sf = roomFrames();
-  std::ostringstream log;
-  LcmNode lcm("memq://", "test", &log);
-  MapService service = makeService(sf.cfg);
-  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  MemqSuite bus(sf.cfg);
+  std::ostringstream& log = bus.log;
+  LcmNode& lcm = bus.lcm;
+  MapServerNode& server = bus.server;
   const std::size_t k = 40, lost = 10;  // killed after 4 s, down for 1 s
   // The first estimator is "killed" after k frames: never polled again (it stays subscribed to the one
   // memq bus, so it lives on, deaf).
@@ -229,10 +239,9 @@ TEST(EstimatorOverMemq, ARestartedEstimatorResumesFromTheMapServersState) {
 
 TEST(EstimatorOverMemq, FramesLostUpstreamGetTheirImuFromTheMapServer) {
   const livo_test::SimFrames& sf = roomFrames();
-  std::ostringstream log;
-  LcmNode lcm("memq://", "test", &log);
-  MapService service = makeService(sf.cfg);
-  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  MemqSuite bus(sf.cfg);
+  std::ostringstream& log = bus.log;
+  LcmNode& lcm = bus.lcm;
   Outputs out(lcm);
   EstimatorNode est(lcm, sf.cfg, fastConfig(), ChannelConfig{}, &log);
   const std::size_t k = 40, lost = 5;
@@ -249,10 +258,10 @@ TEST(EstimatorOverMemq, FramesLostUpstreamGetTheirImuFromTheMapServer) {
 
 TEST(EstimatorOverMemq, AnEstimatorWithAnotherConfigIsRefusedNamingTheKey) {
   const livo_test::SimFrames& sf = roomFrames();
-  std::ostringstream log;
-  LcmNode lcm("memq://", "test", &log);
-  MapService service = makeService(sf.cfg);
-  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  MemqSuite bus(sf.cfg);
+  std::ostringstream& log = bus.log;
+  LcmNode& lcm = bus.lcm;
+  MapServerNode& server = bus.server;
   server.setConfigLines("lidar.model=avia\nmap.memory_cap_mb=512\nvoxel_map.voxel_size_m=0.5\n");
   EstimatorNodeConfig same = fastConfig(), other = fastConfig();
   same.config_lines = "estimator.map_timeout_ms=100\nlidar.model=avia\nmap.memory_cap_mb=0\nvoxel_map.voxel_size_m=0.5\n";
@@ -275,10 +284,9 @@ TEST(EstimatorOverMemq, AnEstimatorWithAnotherConfigIsRefusedNamingTheKey) {
 
 TEST(EstimatorOverMemq, UnderOverloadItShedsImagesThenWholeFramesNeverTheImu) {
   const livo_test::SimFrames& sf = roomFrames();
-  std::ostringstream log;
-  LcmNode lcm("memq://", "test", &log);
-  MapService service = makeService(sf.cfg);
-  MapServerNode server(lcm, service, ChannelConfig{}, &log);
+  MemqSuite bus(sf.cfg);
+  std::ostringstream& log = bus.log;
+  LcmNode& lcm = bus.lcm;
   Outputs out(lcm);
   EstimatorNodeConfig cfg = fastConfig();
   cfg.shed_frames_queued = 10;

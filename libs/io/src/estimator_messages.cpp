@@ -21,15 +21,7 @@ namespace {
 using namespace msgcheck;
 
 Validation checkOdometry(const livo::odometry_t& m) {
-  LIVO_MSG_CHECK(utime(m.utime));
-  LIVO_MSG_CHECK(finite(m.position, 3, "position"));
-  LIVO_MSG_CHECK(quaternion(m.orientation, "orientation"));
-  LIVO_MSG_CHECK(finite(m.velocity, 3, "velocity"));
-  LIVO_MSG_CHECK(finite(m.gyro_bias, 3, "gyro_bias"));
-  LIVO_MSG_CHECK(finite(m.accel_bias, 3, "accel_bias"));
-  LIVO_MSG_CHECK(finite(m.gravity, 3, "gravity"));
-  if (!std::isfinite(m.inv_exposure) || !(m.inv_exposure > 0.0))
-    return Validation::fail("inv_exposure: expected a finite value > 0, got " + num(m.inv_exposure));
+  LIVO_MSG_CHECK(navState(m));
   LIVO_MSG_CHECK(covariance(&m.covariance[0][0], 6, "covariance"));
   if ((m.status & ~odometry_status::kKnownBits) != 0)
     return Validation::fail("status: unknown bits in " + std::to_string(m.status) + " (known STATUS_* bits: " +

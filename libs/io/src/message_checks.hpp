@@ -126,6 +126,22 @@ inline Validation covariance(const double* c, int n, const char* field) {
   return Validation::ok();
 }
 
+/// The navigation state fields odometry_t and filter_state_t share (utime, position, orientation,
+/// velocity, biases, gravity, inv_exposure > 0).
+template <class M>
+Validation navState(const M& m) {
+  LIVO_MSG_CHECK(utime(m.utime));
+  LIVO_MSG_CHECK(finite(m.position, 3, "position"));
+  LIVO_MSG_CHECK(quaternion(m.orientation, "orientation"));
+  LIVO_MSG_CHECK(finite(m.velocity, 3, "velocity"));
+  LIVO_MSG_CHECK(finite(m.gyro_bias, 3, "gyro_bias"));
+  LIVO_MSG_CHECK(finite(m.accel_bias, 3, "accel_bias"));
+  LIVO_MSG_CHECK(finite(m.gravity, 3, "gravity"));
+  if (!std::isfinite(m.inv_exposure) || !(m.inv_exposure > 0.0))
+    return Validation::fail("inv_exposure: expected a finite value > 0, got " + num(m.inv_exposure));
+  return Validation::ok();
+}
+
 /// Symmetric 3x3 covariance stored as its upper triangle (xx, xy, xz, yy, yz, zz).
 template <class T>
 Validation covarianceUpper3(const T* u, const char* field) {

@@ -11,15 +11,7 @@ namespace {
 using namespace msgcheck;
 
 Validation checkState(const livo::filter_state_t& m) {
-  LIVO_MSG_CHECK(utime(m.utime));
-  LIVO_MSG_CHECK(finite(m.position, 3, "position"));
-  LIVO_MSG_CHECK(quaternion(m.orientation, "orientation"));
-  LIVO_MSG_CHECK(finite(m.velocity, 3, "velocity"));
-  LIVO_MSG_CHECK(finite(m.gyro_bias, 3, "gyro_bias"));
-  LIVO_MSG_CHECK(finite(m.accel_bias, 3, "accel_bias"));
-  LIVO_MSG_CHECK(finite(m.gravity, 3, "gravity"));
-  if (!std::isfinite(m.inv_exposure) || !(m.inv_exposure > 0.0))
-    return Validation::fail("inv_exposure: expected a finite value > 0, got " + num(m.inv_exposure));
+  LIVO_MSG_CHECK(navState(m));
   if (!std::isfinite(m.time_offset_s))
     return Validation::fail("time_offset_s: expected a finite value, got " + num(m.time_offset_s));
   if (!std::isfinite(m.accel_scale) || !(m.accel_scale > 0.0) || m.accel_scale > 20.0)
