@@ -14,7 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <sstream>
+#include <thread>
 
 using namespace livo;
 using test::lines;
@@ -96,6 +98,29 @@ TEST(LcmNode, HandlerExceptionsAreRejectsNotCrashes) {
   EXPECT_NO_THROW(lcm.drain());
   EXPECT_EQ(lcm.totalRejected(), 1u);
   EXPECT_NE(lcm.counters().at("X").last_error.find("disk full"), std::string::npos);
+}
+
+TEST(LcmNode, MessagesHandledInsidePollKeepTheSpinFromIdling) {
+  // A busy process (the estimator waiting for submaps handles frames inside its poll) is not idle:
+  // 25 polls of 30 ms, each handling one message (with the spin's own 100 ms waits between them: 3 s),
+  // outlast the 0.5 s idle exit several times.
+  LcmNode lcm("memq://", "test", nullptr);
+  int handled = 0, polls = 0;
+  lcm.subscribeRaw("X", [&](const void*, std::size_t) {
+    ++handled;
+    return Validation::ok();
+  });
+  const LcmNode::SpinEnd end = lcm.spin(0.5, [&] {
+    if (polls >= 25) return;
+    ++polls;
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));  // the work of a frame
+    const char byte = 0;
+    lcm.publishRaw("X", &byte, 1);
+    lcm.drain();  // handled inside poll, not by the spin's own handleOnce
+  });
+  EXPECT_EQ(end, LcmNode::SpinEnd::kIdle);
+  EXPECT_EQ(polls, 25) << "the spin went idle while poll was still handling messages";
+  EXPECT_EQ(handled, 25);
 }
 
 TEST(LcmNode, WarningsAreRateLimited) {

@@ -1,5 +1,7 @@
 #include "livo/common/timing.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -7,6 +9,12 @@
 #include <string>
 
 namespace livo {
+
+double ThreadCpuStopwatch::nowMs() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) * 1e3 + double(ts.tv_nsec) * 1e-6;
+}
 
 SampleSummary summarize(std::vector<double> v) {
   SampleSummary s;

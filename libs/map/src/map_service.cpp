@@ -56,10 +56,12 @@ Submap MapService::answer(const MapQuery& q) {
 
 MapUpdateReport MapService::apply(const MapUpdate& u) {
   Stopwatch watch;
+  ThreadCpuStopwatch cpu;
   latest_ = std::max(latest_, u.utime);
   if (u.utime < latest_update_) ++counters_.stale_updates;
   latest_update_ = std::max(latest_update_, u.utime);
   counters_.points_inserted += map_.lidar().insert(u.points);
+  const double insert_cpu_ms = cpu.elapsedMs();
   for (const VisualPoint& p : u.new_visual_points) {
     if (p.obs.empty()) {
       map_.visual().upsert(p);
@@ -76,10 +78,16 @@ MapUpdateReport MapService::apply(const MapUpdate& u) {
     else
       ++counters_.observations_unknown;
   }
+  const double visual_cpu_ms = cpu.elapsedMs() - insert_cpu_ms;
   MapUpdateReport rep = map_.update(u.T_world_imu.translation());
+  const double maintenance_cpu_ms = cpu.elapsedMs() - insert_cpu_ms - visual_cpu_ms;
+  counters_.max_insert_cpu_ms = std::max(counters_.max_insert_cpu_ms, insert_cpu_ms);
+  counters_.max_visual_cpu_ms = std::max(counters_.max_visual_cpu_ms, visual_cpu_ms);
+  counters_.max_maintenance_cpu_ms = std::max(counters_.max_maintenance_cpu_ms, maintenance_cpu_ms);
   if (rep.slid) counters_.last_slide_ms = rep.ms;
   ++counters_.updates;
   counters_.max_update_ms = std::max(counters_.max_update_ms, watch.elapsedMs());
+  counters_.max_update_cpu_ms = std::max(counters_.max_update_cpu_ms, cpu.elapsedMs());
   return rep;
 }
 

@@ -119,8 +119,12 @@ bool LcmNode::handleOnce(int timeout_ms) {
 LcmNode::SpinEnd LcmNode::spin(double idle_exit_s, const std::function<void()>& poll) {
   Stopwatch idle;
   while (!stopRequested()) {
-    if (handleOnce(100)) idle.restart();
+    const std::uint64_t before = totalReceived();
+    handleOnce(100);
     if (poll) poll();
+    // Messages handled inside poll() count too (the estimator handles frames and answers while it
+    // waits for the map server): a process busy for longer than idle_exit_s is not idle.
+    if (totalReceived() != before) idle.restart();
     if (idle_exit_s > 0 && idle.elapsedMs() > 1000.0 * idle_exit_s) return SpinEnd::kIdle;
   }
   return SpinEnd::kStopSignal;

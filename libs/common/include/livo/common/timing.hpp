@@ -20,6 +20,18 @@ class Stopwatch {
   Clock::time_point start_;
 };
 
+/// CPU time of the calling thread in milliseconds (CLOCK_THREAD_CPUTIME_ID): the work done, without the
+/// time the thread waited for a core (what a wall-clock Stopwatch adds on a loaded machine).
+class ThreadCpuStopwatch {
+ public:
+  ThreadCpuStopwatch() : start_(nowMs()) {}
+  double elapsedMs() const { return nowMs() - start_; }
+  static double nowMs();
+
+ private:
+  double start_;
+};
+
 /// Adds the elapsed milliseconds of its scope to `*sink_ms` when destroyed.
 class ScopedTimer {
  public:

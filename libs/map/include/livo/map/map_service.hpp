@@ -24,7 +24,10 @@ struct MapServiceCounters {
   std::size_t observations_added = 0;
   std::size_t observations_unknown = 0;  ///< for ids not in the map (or converged points)
   double last_slide_ms = 0.0;         ///< the last update that started a slide
-  double max_update_ms = 0.0;         ///< worst apply()
+  double max_update_ms = 0.0;         ///< worst apply(), wall clock
+  double max_update_cpu_ms = 0.0;     ///< worst apply(), the thread's CPU time (without waits for a core)
+  /// Worst CPU time of apply()'s parts: LiDAR insertion, visual changes, maintenance (slides, cap).
+  double max_insert_cpu_ms = 0.0, max_visual_cpu_ms = 0.0, max_maintenance_cpu_ms = 0.0;
 };
 
 class MapService {
