@@ -82,25 +82,16 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
       resume_answered_ = true;
       return Validation::ok();
     });
-    resume_request_id_ = newRequestId();
-    livo::resume_request_t q{};
-    q.request_id = resume_request_id_;
-    q.config = cfg_.config_lines;
-    since_resume_request_.restart();
-    lcm_.publish(channels_.resume_request, q);
+    sendResumeRequest();
   } else {
     started_ = true;
     start_report_ = "new origin: resume_wait_ms is 0";
   }
 }
 
-void EstimatorNode::startFrom(const Frame& first) {
+bool EstimatorNode::startFrom(const Frame& first) {
   started_ = true;
-  while (!resume_answered_) {  // the request went out at construction
-    const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
-    if (left <= 0) break;
-    lcm_.handleOnce(std::max(1, int(left)));
-  }
+  awaitResumeAnswer();  // the request went out at construction
   refuseOtherConfig();
   std::ostringstream why;
   why << std::fixed << std::setprecision(3);
@@ -126,12 +117,13 @@ void EstimatorNode::startFrom(const Frame& first) {
       pipeline_.resume(resume_.snapshot.filter, std::move(resume_.imu), src.str());
       start_report_ = "resumed";
       resume_ = ResumeAnswer{};
-      return;
+      return true;
     }
   }
   start_report_ = why.str();
   resume_ = ResumeAnswer{};
   if (log_) *log_ << "livo-estimator: " << start_report_ << "\n";
+  return false;
 }
 
 bool EstimatorNode::request(const MapQuery& q, Submap& out) {
@@ -204,7 +196,7 @@ std::int64_t EstimatorNode::newRequestId() {
   return (std::int64_t(::getpid()) << 32) ^ std::chrono::steady_clock::now().time_since_epoch().count();
 }
 
-bool EstimatorNode::askMapServer() {
+void EstimatorNode::sendResumeRequest() {
   resume_request_id_ = newRequestId();
   resume_answered_ = false;
   livo::resume_request_t q{};
@@ -212,12 +204,20 @@ bool EstimatorNode::askMapServer() {
   q.config = cfg_.config_lines;
   since_resume_request_.restart();
   lcm_.publish(channels_.resume_request, q);
+}
+
+bool EstimatorNode::awaitResumeAnswer() {
   while (!resume_answered_) {
     const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
     if (left <= 0) break;
     lcm_.handleOnce(std::max(1, int(left)));
   }
   return resume_answered_;
+}
+
+bool EstimatorNode::askMapServer() {
+  sendResumeRequest();
+  return awaitResumeAnswer();
 }
 
 void EstimatorNode::refuseOtherConfig() const {
@@ -291,23 +291,15 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
     q.frame.image = Image();
     ++counters_.images_shed;
   }
-  const Frame& in = q.frame;
-  bool resumed_now = false;
-  if (!started_) {
-    startFrom(in);
-    resumed_now = start_report_ == "resumed";  // the resume answer's samples bridge this frame's gap
-  }
+  // The resume answer's samples bridge the first frame's gap (startFrom).
+  const bool resumed_now = !started_ && startFrom(q.frame);
   // IMU lost upstream (a restarted preprocessor, dropped frames): the map server holds the samples
   // after this estimator's last state.
-  Frame bridged_frame;
-  const Frame* fp = &in;
   const double period_s = 1.0 / pipeline_.config().lio.imu.rate_hz;
-  if (!resumed_now && pipeline_.odometry().initialized() && !in.imu.empty() &&
-      toSeconds(in.imu.front().utime - pipeline_.odometry().state().utime) > 3.0 * period_s) {
-    bridged_frame = in;
-    if (bridgeImuGap(bridged_frame)) fp = &bridged_frame;
-  }
-  const Frame& frame = *fp;
+  if (!resumed_now && pipeline_.odometry().initialized() && !q.frame.imu.empty() &&
+      toSeconds(q.frame.imu.front().utime - pipeline_.odometry().state().utime) > 3.0 * period_s)
+    bridgeImuGap(q.frame);
+  const Frame& frame = q.frame;
   counters_.nonfinite_points += nonfinite;
   const FrameResult f = pipeline_.process(frame, map_);
   ++counters_.frames;

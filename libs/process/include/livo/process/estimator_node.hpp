@@ -102,11 +102,15 @@ class EstimatorNode : public MapClient {
   void processFrame(Queued& q, bool shed_image);
   /// Before the first frame: waits (up to resume_wait_ms since the request) for the map server's answer
   /// and resumes from it when it fits the frame.
-  void startFrom(const Frame& first);
+  bool startFrom(const Frame& first);  ///< true when it resumed
   static std::int64_t newRequestId();
   /// Throws std::runtime_error naming the keys when the map server answered that its config differs.
   void refuseOtherConfig() const;
-  /// Publishes a resume request and waits up to resume_wait_ms for the answer (in resume_).
+  /// Publishes a resume request (a new id; the answer lands in resume_).
+  void sendResumeRequest();
+  /// Waits until the answer came or resume_wait_ms passed since the request; true when it came.
+  bool awaitResumeAnswer();
+  /// sendResumeRequest() + awaitResumeAnswer().
   bool askMapServer();
   /// `frame`'s IMU begins later than the filter state: prepends the map server's samples of the gap.
   bool bridgeImuGap(Frame& frame);
