@@ -79,7 +79,7 @@ TEST(SpyNetns, ListsEveryChannelOfAFourProcessRun) {
             spy_out);
   // lcm-spy is up once it printed its first table.
   ASSERT_TRUE(waitUntil([&] { return readFile(spy_out).find("# lcm-spy channels at") != std::string::npos; }, 60))
-      << readFile(spy_out);
+      << readFile(spy_out) << x.report();
   FourProcesses suite(ns, demo.rig, dir);
   auto player = suite.play(demo.log);
   const bool listed = waitUntil([&] { return allListed(lastTable(readFile(spy_out))); }, 90);

@@ -116,7 +116,7 @@ TEST(ViewerCli, RunDirectoryDrawsTheTrajectoryWhereTheCameraMatrixPutsIt) {
                     "--screenshot-at 1000 " + png,
                 out, dir),
             0)
-      << out;
+      << out << x.report();
   EXPECT_NE(out.find("201 poses; map.pcd: 3721 points (x y z rgb)"), std::string::npos) << out;
   const cv::Mat img = cv::imread(png, cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty()) << out;

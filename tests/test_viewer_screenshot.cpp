@@ -74,7 +74,7 @@ TEST(ViewerScreenshot, TrajectoryPixelsLieOnTheProjectedGroundTruth) {
                             "viewer");
   FourProcesses::awaitReady(suite.log("viewer"));
   auto player = suite.play(demo.log);
-  EXPECT_EQ(viewer->wait(120), 0) << readFile(suite.log("viewer"));
+  EXPECT_EQ(viewer->wait(120), 0) << readFile(suite.log("viewer")) << x.report();
   EXPECT_EQ(player->wait(120), 0) << readFile(suite.log("player"));
   suite.finish();
   const std::string viewer_log = readFile(suite.log("viewer"));
