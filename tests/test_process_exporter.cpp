@@ -307,6 +307,52 @@ TEST(MapCloud, CapOnPointsAndNonFiniteInputAreCounted) {
   }
 }
 
+TEST(OccupancyMap, MemoryCapStopsTheTreeGrowingAndCountsTheScansLeftOut) {
+  // A rig driving along x past a wall at y = 6 m: every scan adds new free space and new hits.
+  const auto scan = [](int i, Eigen::Vector3d& origin) {
+    origin = Eigen::Vector3d(1.0 * i, 0.0, 1.0);
+    std::vector<Eigen::Vector3f> pts;
+    for (int a = -40; a <= 40; ++a)
+      for (int h = 0; h <= 10; ++h) pts.emplace_back(float(origin.x() + 0.1 * a), 6.0f, float(0.2 * h));
+    return pts;
+  };
+  constexpr int kScans = 40;
+  MapExportConfig cfg;
+  cfg.octomap_resolution_m = 0.1;
+  cfg.octomap_queue_scans = 0;  // in this thread: the cap is checked in a known order
+  cfg.octomap_max_mb = 0.0;     // no cap
+  OccupancyMap full(cfg);
+  Eigen::Vector3d origin;
+  for (int i = 0; i < kScans; ++i) full.insertScan(origin, scan(i, origin));
+  const double full_bytes = full.memoryBytes();
+  // The cap counts malloc's chunks too: never less than OctoMap's own count.
+  EXPECT_GE(full_bytes, double(full.tree().memoryUsage()));
+  EXPECT_EQ(full.scansCapped(), 0u);
+  EXPECT_TRUE(full.capNote().empty());
+
+  cfg.octomap_max_mb = 0.5 * full_bytes / (1024.0 * 1024.0);
+  OccupancyMap capped(cfg);
+  for (int i = 0; i < kScans; ++i) capped.insertScan(origin, scan(i, origin));
+  ASSERT_GT(capped.cappedAtScan(), 0u);
+  EXPECT_LT(capped.cappedAtScan(), std::uint64_t(kScans));
+  EXPECT_EQ(capped.scansInserted(), capped.cappedAtScan());
+  EXPECT_EQ(capped.scansInserted() + capped.scansCapped(), std::uint64_t(kScans));
+  // Checked whenever the tree grew by 5 %: it stops within that plus one scan's growth of the cap.
+  const double per_scan = full_bytes / kScans;
+  EXPECT_GT(capped.memoryBytes(), cfg.octomap_max_mb * 1024 * 1024);
+  EXPECT_LT(capped.memoryBytes(), 1.05 * cfg.octomap_max_mb * 1024 * 1024 + 2 * per_scan);
+  EXPECT_NE(capped.capNote().find("map.bt stopped growing at exporter.octomap_max_mb"), std::string::npos)
+      << capped.capNote();
+  ConfigFile file = ConfigFile::parse("exporter: {octomap_max_mb: -1}\n", "rig.yaml");
+  MapExportConfig loaded;
+  try {
+    loaded.load(file.root().section("exporter"));
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("exporter.octomap_max_mb"), std::string::npos) << e.what();
+  }
+}
+
 // ---------------------------------------------------------------- speed (opt-in)
 // ./test_process_exporter --gtest_also_run_disabled_tests --gtest_filter='*Speed*'
 

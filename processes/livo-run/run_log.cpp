@@ -274,6 +274,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   counters["map_pcd_points"] = double(sink.cloud.size());
   addStatsCounters(pst, hs.counters, counters);
   counters["map_bt_scans_dropped"] = double(sink.occupancy.scansDropped());
+  counters["map_bt_scans_capped"] = double(sink.occupancy.scansCapped());
   const ImageCheckCounters& ic = pipeline.frames().imageCounters();
   counters["images_wrong_size"] = double(ic.wrong_size);
   counters["images_black"] = double(ic.black);
@@ -285,6 +286,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
                                            {"threads", std::to_string(args.threads)},
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
+  if (!sink.occupancy.capNote().empty()) notes["map_bt"] = sink.occupancy.capNote();
   if (!sink.health.anyPose())
     sink.health.no_pose_reason = outputs.frames() == 0 ? "no complete frame in the log (LiDAR scans with IMU samples)"
                                                         : "never initialised: " + sink.last_wait;

@@ -55,8 +55,7 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
   // From motion, once the static search has given up (a static window observes the gyro bias).
   if (motion_converged && init_.noStaticWindow()) {
     motion_->takeOver(x_, P_);
-    accel_scale_ = motion_->accelScale();
-    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
+    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, motion_->accelScale());
     std::ostringstream os;
     os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
        << "; " << motion_->describe();
@@ -90,8 +89,7 @@ bool LioOdometry::initCoarse(const Frame& frame) {
   const double sv = std::max(2.0, 0.5 * v_body.norm());
   P_.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
   x_ = x;
-  accel_scale_ = accel_scale;
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale);
   motion_.reset();
   std::ostringstream os;
   os.precision(3);
@@ -106,8 +104,7 @@ bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, c
   if (initialized_) return false;
   x_ = prior.state;
   P_ = prior.P;
-  accel_scale_ = prior.accel_scale;
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, prior.accel_scale);
   resume_imu_ = std::move(imu);
   motion_.reset();
   initialized_ = true;
@@ -120,6 +117,14 @@ bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, c
      << " m), " << resume_imu_.size() << " IMU samples to bridge the gap";
   init_message_ = os.str();
   return true;
+}
+
+void LioOdometry::propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame) {
+  const Utime cut = frame.imu.empty() ? frame.utime : frame.imu.front().utime;
+  std::vector<ImuSample> before;
+  for (const auto& s : samples)
+    if (s.utime > x_.utime && s.utime < cut) before.push_back(s);
+  if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
 }
 
 std::string LioOdometry::waitMessage() const {
@@ -148,15 +153,9 @@ LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
 void LioOdometry::initAtRest(const Frame& frame) {
   x_ = init_.initialState();
   P_ = init_.initialCovariance();
-  accel_scale_ = init_.accelScale();
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale_);
-  // Through the samples after the chosen window, up to where this frame's own samples begin (the
-  // frame's propagation keeps its trace for the undistortion).
-  const Utime cut = frame.imu.empty() ? x_.utime : frame.imu.front().utime;
-  std::vector<ImuSample> before;
-  for (const auto& s : init_.samplesAfterWindow())
-    if (s.utime < cut) before.push_back(s);
-  if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+  // Through the samples after the chosen window.
+  propagateUpToFrame(init_.samplesAfterWindow(), frame);
   motion_.reset();
   init_message_ = init_.describe();
 }
@@ -239,11 +238,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
 
   // 1a'. After resume(): across the outage, through the samples up to where this frame's own begin.
   if (!resume_imu_.empty()) {
-    const Utime cut = frame.imu.empty() ? frame.utime : frame.imu.front().utime;
-    std::vector<ImuSample> before;
-    for (const auto& s : resume_imu_)
-      if (s.utime > x_.utime && s.utime < cut) before.push_back(s);
-    if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+    propagateUpToFrame(resume_imu_, frame);
     resume_imu_.clear();
     resume_imu_.shrink_to_fit();
   }

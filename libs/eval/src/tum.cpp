@@ -88,28 +88,40 @@ void writeTum(std::ostream& out, const StampedPose& pose) {
   out << buf;
 }
 
-TumWriter::TumWriter(const std::string& path, bool append) : path_(path) {
+ContinuedFile continueLineFile(const std::string& path) {
+  ContinuedFile f;
   std::error_code ec;
-  const bool continue_file = append && std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > 0;
-  if (continue_file) {
-    // Keep the complete lines only (a kill may have cut the last one), and find the last time.
-    std::ifstream in(path, std::ios::binary);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
-    if (keep < text.size()) std::filesystem::resize_file(path, keep);
-    std::istringstream lines(text.substr(0, keep));
-    std::string line;
-    while (std::getline(lines, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      double t = 0;
-      if (std::istringstream(line) >> t) {
-        last_t_ = std::max(last_t_, t);
-        ++previous_count_;
-      }
+  f.exists = std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > 0;
+  if (!f.exists) return f;
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t nl = text.rfind('\n');
+  const std::size_t keep = nl == std::string::npos ? 0 : nl + 1;
+  if (keep < text.size()) {
+    std::filesystem::resize_file(path, keep, ec);
+    if (ec) throw std::runtime_error(path + ": cannot cut its partial last line: " + ec.message());
+  }
+  std::istringstream lines(text.substr(0, keep));
+  std::string line;
+  while (std::getline(lines, line)) {
+    double t = 0;
+    if (line.empty() || line[0] == '#' || !(std::istringstream(line) >> t)) continue;
+    f.last_t = std::max(f.last_t, t);
+    ++f.rows;
+  }
+  return f;
+}
+
+TumWriter::TumWriter(const std::string& path, bool append) : path_(path) {
+  if (append) {
+    const ContinuedFile f = continueLineFile(path);
+    if (f.exists) {
+      last_t_ = f.last_t;
+      previous_count_ = f.rows;
+      out_.open(path, std::ios::out | std::ios::app);
+      if (!out_) throw std::runtime_error(path + ": cannot open trajectory file for appending");
+      return;
     }
-    out_.open(path, std::ios::out | std::ios::app);
-    if (!out_) throw std::runtime_error(path + ": cannot open trajectory file for appending");
-    return;
   }
   out_.open(path, std::ios::out | std::ios::trunc);
   if (!out_) throw std::runtime_error(path + ": cannot open trajectory file for writing");

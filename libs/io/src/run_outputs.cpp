@@ -59,38 +59,16 @@ const char* frameState(const FrameRecord& f) {
   return "ok";
 }
 
-namespace {
-
-/// Append mode: cuts a partial last line off `path` and returns the time of its last complete row
-/// (first column; -inf when the file holds none).
-double continueCsv(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::size_t nl = text.rfind('\n');
-  const std::size_t keep = nl == std::string::npos ? 0 : nl + 1;
-  if (keep < text.size()) std::filesystem::resize_file(path, keep);
-  double last = -std::numeric_limits<double>::infinity();
-  std::istringstream lines(text.substr(0, keep));
-  std::string line;
-  while (std::getline(lines, line)) {
-    double t = 0;
-    if (!line.empty() && line[0] != 't' && std::istringstream(line) >> t) last = std::max(last, t);
-  }
-  return last;
-}
-
-}  // namespace
-
 RunOutputs::RunOutputs(const std::string& dir, bool append)
-    : dir_(ensureDir(dir)), append_(append), tum_(dir + "/trajectory.tum", append),
-      last_csv_t_(-std::numeric_limits<double>::infinity()) {
+    : dir_(ensureDir(dir)), append_(append), tum_(dir + "/trajectory.tum", append) {
   const std::string csv = dir + "/frames.csv";
-  std::error_code ec;
-  const bool continue_csv = append && std::filesystem::exists(csv, ec) && std::filesystem::file_size(csv, ec) > 0;
-  if (continue_csv) last_csv_t_ = continueCsv(csv);
-  csv_.open(csv, continue_csv ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
+  const ContinuedFile previous = append ? continueLineFile(csv) : ContinuedFile{};
+  // Frames at or before the end of either file were written by the previous writer (a kill between
+  // the two writes of a frame leaves its pose in trajectory.tum only).
+  if (append) after_t_ = std::max(previous.last_t, tum_.lastTime());
+  csv_.open(csv, previous.exists ? std::ios::out | std::ios::app : std::ios::out | std::ios::trunc);
   if (!csv_) throw std::runtime_error(csv + ": cannot open for writing");
-  if (!continue_csv)
+  if (!previous.exists)
     csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
             "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state\n";
   csv_.flush();
@@ -98,11 +76,13 @@ RunOutputs::RunOutputs(const std::string& dir, bool append)
 
 void RunOutputs::addFrame(const FrameRecord& f) {
   const double t = toSeconds(f.utime);
-  if (append_ && (!(t > last_csv_t_) || (f.has_pose && !(t > tum_.lastTime())))) {  // not after the files' end
-    ++skipped_frames_;
-    return;
+  if (append_) {
+    if (!(t > after_t_)) {  // not after the files' end
+      ++skipped_frames_;
+      return;
+    }
+    after_t_ = t;
   }
-  last_csv_t_ = std::max(last_csv_t_, t);
   records_.push_back(f);
   if (f.has_pose) tum_.write(toSeconds(f.utime), f.T_world_imu);
   csv_ << std::fixed << std::setprecision(6) << toSeconds(f.utime) << std::setprecision(3) << ',' << f.lio_ms << ','

@@ -91,7 +91,10 @@ EstimatorNode::EstimatorNode(LcmNode& lcm, PipelineConfig pipeline, EstimatorNod
 
 bool EstimatorNode::startFrom(const Frame& first) {
   started_ = true;
-  awaitResumeAnswer();  // the request went out at construction
+  // The request went out at construction. Unanswered and its wait over before the first frame came
+  // (the map server was started after this estimator): ask again.
+  if (!resume_answered_ && since_resume_request_.elapsedMs() >= cfg_.resume_wait_ms) sendResumeRequest();
+  awaitResumeAnswer();
   refuseOtherConfig();
   std::ostringstream why;
   why << std::fixed << std::setprecision(3);
@@ -199,18 +202,25 @@ std::int64_t EstimatorNode::newRequestId() {
 void EstimatorNode::sendResumeRequest() {
   resume_request_id_ = newRequestId();
   resume_answered_ = false;
+  since_resume_request_.restart();
+  publishResumeRequest();
+}
+
+void EstimatorNode::publishResumeRequest() {
   livo::resume_request_t q{};
   q.request_id = resume_request_id_;
   q.config = cfg_.config_lines;
-  since_resume_request_.restart();
+  since_resume_publish_.restart();
   lcm_.publish(channels_.resume_request, q);
 }
 
 bool EstimatorNode::awaitResumeAnswer() {
+  constexpr double kRepeatMs = 100.0;
   while (!resume_answered_) {
     const double left = cfg_.resume_wait_ms - since_resume_request_.elapsedMs();
     if (left <= 0) break;
-    lcm_.handleOnce(std::max(1, int(left)));
+    if (since_resume_publish_.elapsedMs() >= kRepeatMs) publishResumeRequest();  // same id: one answer counts
+    lcm_.handleOnce(std::max(1, int(std::min(left, kRepeatMs - since_resume_publish_.elapsedMs()))));
   }
   return resume_answered_;
 }

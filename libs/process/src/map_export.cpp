@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include <fcntl.h>
@@ -21,7 +22,7 @@ void MapExportConfig::load(const ConfigNode& n) {
   n.get("map_voxel_m", map_voxel_m).get("max_map_points", max_map_points).get("intensity_max", intensity_max);
   n.get("octomap_enabled", octomap_enabled).get("octomap_resolution_m", octomap_resolution_m);
   n.get("octomap_max_range_m", octomap_max_range_m).get("octomap_every_n", octomap_every_n);
-  n.get("octomap_queue_scans", octomap_queue_scans);
+  n.get("octomap_queue_scans", octomap_queue_scans).get("octomap_max_mb", octomap_max_mb);
   n.check(map_voxel_m > 0.0, "map_voxel_m", "must be > 0 m");
   n.check(max_map_points > 0, "max_map_points", "must be > 0");
   n.check(intensity_max >= 0.0, "intensity_max", "must be >= 0 (0: automatic)");
@@ -29,6 +30,7 @@ void MapExportConfig::load(const ConfigNode& n) {
   n.check(octomap_max_range_m > 0.0, "octomap_max_range_m", "must be > 0 m");
   n.check(octomap_every_n >= 1, "octomap_every_n", "must be >= 1");
   n.check(octomap_queue_scans >= 0, "octomap_queue_scans", "must be >= 0 (0: no worker thread)");
+  n.check(octomap_max_mb >= 0.0, "octomap_max_mb", "must be >= 0 MB (0: no cap)");
 }
 
 void MapExportConfig::validate() const {
@@ -42,6 +44,7 @@ void MapExportConfig::validate() const {
   need(std::isfinite(octomap_max_range_m) && octomap_max_range_m > 0.0, "octomap_max_range_m must be > 0");
   need(octomap_every_n >= 1, "octomap_every_n must be >= 1");
   need(octomap_queue_scans >= 0, "octomap_queue_scans must be >= 0");
+  need(std::isfinite(octomap_max_mb) && octomap_max_mb >= 0.0, "octomap_max_mb must be >= 0");
 }
 
 // ---------------------------------------------------------------- map.pcd
@@ -194,7 +197,26 @@ void OccupancyMap::insertScan(const Eigen::Vector3d& p_world_sensor, const std::
   wake_.notify_one();
 }
 
+double OccupancyMap::treeBytes() const {
+  // OcTree::memoryUsage() counts the nodes and the inner nodes' child arrays, not malloc's chunk
+  // overhead: a 16-byte node takes a 32-byte chunk, an inner node's 64-byte array an 80-byte one.
+  const double leaves = double(tree_->getNumLeafNodes()), all = double(tree_->size());
+  return all * 32.0 + (all - leaves) * 80.0;
+}
+
+std::string OccupancyMap::capNote() const {
+  if (!capped_) return "";
+  std::ostringstream os;
+  os << "map.bt stopped growing at exporter.octomap_max_mb (" << cfg_.octomap_max_mb << " MB) after scan "
+     << capped_at_scan_.load() << "; " << capped_scans_.load() << " later scans are not in it (map.pcd has them)";
+  return os.str();
+}
+
 void OccupancyMap::insertNow(const Job& job) {
+  if (capped_) {
+    ++capped_scans_;
+    return;
+  }
   octomap::Pointcloud cloud;
   cloud.reserve(job.points.size());
   for (const auto& p : job.points)
@@ -203,6 +225,15 @@ void OccupancyMap::insertNow(const Job& job) {
   // discretize: one ray per end voxel (the scans are already downsampled; this removes duplicates).
   tree_->insertPointCloud(cloud, origin, cfg_.octomap_max_range_m, /*lazy_eval=*/false, /*discretize=*/true);
   ++inserted_;
+  // The memory cap: counting the leaves walks the tree, so only after the tree grew by 5 %.
+  if (cfg_.octomap_max_mb > 0.0 && tree_->size() >= next_check_nodes_) {
+    const double bytes = treeBytes();
+    if (bytes > cfg_.octomap_max_mb * 1024.0 * 1024.0) {
+      capped_ = true;
+      capped_at_scan_ = inserted_.load();
+    }
+    next_check_nodes_ = tree_->size() + tree_->size() / 20 + 1;
+  }
 }
 
 void OccupancyMap::workerLoop() {

@@ -83,6 +83,9 @@ class ImuPropagator {
   /// in P' = F P F^T + Q).
   StateCov transition(const NavState& x, const Vec3& gyro, const Vec3& accel, double dt) const;
 
+  /// The factor the raw accelerometer samples are multiplied by (1: m/s^2; g when they are in g).
+  double accelScale() const { return accel_scale_; }
+
  private:
   void step(NavState& x, StateCov& P, const Vec3& gyro, const Vec3& accel, double dt, ImuTracePoint* tp) const;
   ImuConfig cfg_;

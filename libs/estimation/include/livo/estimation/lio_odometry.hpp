@@ -89,7 +89,7 @@ class LioOdometry {
   /// nothing) once initialised.
   bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source);
   /// The state after the last frame, with its covariance and the accelerometer units (after initialized()).
-  FilterState filterState() const { return FilterState{x_, P_, accel_scale_}; }
+  FilterState filterState() const { return FilterState{x_, P_, propagator_ ? propagator_->accelScale() : 1.0}; }
 
   /// True once a scan went into the map (update() runs from then on).
   bool mapStarted() const { return map_started_; }
@@ -119,6 +119,9 @@ class LioOdometry {
   void initAtRest(const Frame& frame);
   /// The deadline passed (ImuConfig::deadlineSeconds()): start from ImuInitializer::coarseState().
   bool initCoarse(const Frame& frame);
+  /// x_ / P_ through the samples of `samples` after x_'s time and before this frame's own samples
+  /// begin (the frame's propagation keeps its trace for the undistortion).
+  void propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame);
 
   LioOdometryConfig cfg_;
   ImuInitializer init_;
@@ -126,7 +129,6 @@ class LioOdometry {
   bool initialized_ = false;
   int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
   std::unique_ptr<ImuPropagator> propagator_;
-  double accel_scale_ = 1.0;          ///< the propagator's
   std::vector<ImuSample> resume_imu_;  ///< resume(): samples to propagate through before the next frame's
   NavState x_;
   StateCov P_ = initialCovariance();

@@ -33,6 +33,17 @@ constexpr double kTumQuatNormTolerance = 1e-2;
 /// decimals (nm / 1e-9 resolution, more than any estimator needs). qw >= 0.
 void writeTum(std::ostream& out, const StampedPose& pose);
 
+/// A line file continued by a restarted writer (trajectory.tum, frames.csv): a last line cut short by
+/// a kill is cut off the file; `rows` counts its complete lines whose first field is a number (headers
+/// and '#' lines are not rows) and `last_t` is the largest such number (-inf when none). `exists`: the
+/// file was there and not empty (a writer continues it; else it starts a new one).
+struct ContinuedFile {
+  bool exists = false;
+  std::size_t rows = 0;
+  double last_t = -std::numeric_limits<double>::infinity();
+};
+ContinuedFile continueLineFile(const std::string& path);
+
 /// Appends poses to a TUM file, one flushed line per pose, so that a killed process loses at most the
 /// pose being written. Writes a '#' header line first.
 class TumWriter {

@@ -24,6 +24,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -121,7 +122,8 @@ class RunOutputs {
   TumWriter tum_;
   std::ofstream csv_;
   std::vector<FrameRecord> records_;
-  double last_csv_t_;  ///< frames.csv's last time (-inf: none)
+  /// Append mode: the last frame time in either file; frames must come after it.
+  double after_t_ = -std::numeric_limits<double>::infinity();
   std::size_t skipped_frames_ = 0;
 };
 

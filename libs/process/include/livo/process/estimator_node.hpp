@@ -108,8 +108,11 @@ class EstimatorNode : public MapClient {
   void refuseOtherConfig() const;
   /// Publishes a resume request (a new id; the answer lands in resume_).
   void sendResumeRequest();
-  /// Waits until the answer came or resume_wait_ms passed since the request; true when it came.
+  /// Waits until the answer came or resume_wait_ms passed since the request; true when it came. The
+  /// request is published again every 100 ms meanwhile (a map server started together with this
+  /// estimator may not have been listening to the first one).
   bool awaitResumeAnswer();
+  void publishResumeRequest();
   /// sendResumeRequest() + awaitResumeAnswer().
   bool askMapServer();
   /// `frame`'s IMU begins later than the filter state: prepends the map server's samples of the gap.
@@ -140,7 +143,7 @@ class EstimatorNode : public MapClient {
   // Resume at start.
   std::int64_t resume_request_id_ = 0;
   bool resume_answered_ = false, started_ = false;
-  Stopwatch since_resume_request_;
+  Stopwatch since_resume_request_, since_resume_publish_;
   ResumeAnswer resume_;
   std::string start_report_;
   Counters counters_;

@@ -44,6 +44,10 @@ struct MapExportConfig {
   /// Scans waiting for the OctoMap worker thread (the message thread never waits for ray casting);
   /// when full, the oldest waiting scan is dropped (counted). 0: insert in the caller's thread.
   int octomap_queue_scans = 8;
+  /// The OctoMap's memory, MB (its nodes with malloc's overhead, checked whenever the tree grew by
+  /// 5 %): at the cap the tree stops growing and later scans are left out of map.bt (counted;
+  /// map.pcd keeps them). Free space dominates: the 2.1 km street at 0.2 m needs ~2.7 GB. 0: no cap.
+  double octomap_max_mb = 512.0;
 
   /// Reads the keys above from the `exporter` section; throws ConfigError naming the key.
   void load(const ConfigNode& exporter);
@@ -94,6 +98,16 @@ class OccupancyMap {
   void waitIdle();
   std::uint64_t scansInserted() const { return inserted_; }
   std::uint64_t scansDropped() const { return dropped_; }  ///< by a full queue
+  /// Scans left out because the tree reached octomap_max_mb, and the scan count at which it did (0: not reached).
+  std::uint64_t scansCapped() const { return capped_scans_; }
+  std::uint64_t cappedAtScan() const { return capped_at_scan_; }
+  /// Empty until the cap was reached; then what map.bt leaves out, for stats.json notes and summaries.
+  std::string capNote() const;
+  /// The tree's memory as the cap counts it, bytes (walks the tree: waits for the queue first).
+  double memoryBytes() {
+    waitIdle();
+    return treeBytes();
+  }
   /// Leaves of the tree (waits for the queue first).
   std::size_t leafCount();
   /// Writes the binary (maximum-likelihood) tree after waitIdle(). Throws std::runtime_error naming
@@ -109,11 +123,14 @@ class OccupancyMap {
   };
   void insertNow(const Job& job);
   void workerLoop();
+  double treeBytes() const;
 
   MapExportConfig cfg_;
   std::unique_ptr<octomap::OcTree> tree_;
   std::uint64_t calls_ = 0;
-  std::atomic<std::uint64_t> inserted_{0}, dropped_{0};
+  std::atomic<std::uint64_t> inserted_{0}, dropped_{0}, capped_scans_{0}, capped_at_scan_{0};
+  std::atomic<bool> capped_{false};
+  std::size_t next_check_nodes_ = 0;  ///< tree size at which the cap is checked next (worker only)
   // Worker: jobs_ and busy_ under mutex_; the tree belongs to the worker while it runs a job.
   std::mutex mutex_;
   std::condition_variable wake_, idle_;
