@@ -67,7 +67,12 @@ Trajectory runFrames(FramePipeline& p, InProcessMap& map, std::size_t from, std:
   Trajectory t;
   for (std::size_t i = from; i < to && i < room().frames.size(); ++i) {
     const FrameResult r = p.process(room().frames[i], map);
-    if (r.lio.initialized) t.push_back({toSeconds(room().frames[i].utime), r.lio.state.pose()});
+    if (!r.lio.initialized) continue;
+    t.push_back({toSeconds(room().frames[i].utime), r.lio.state.pose()});
+    // The frame's result records the one filter state as the frame left it.
+    EXPECT_EQ(r.lio.state.utime, p.filter().x().utime);
+    EXPECT_EQ((r.lio.state.p_world_imu - p.filter().x().p_world_imu).norm(), 0.0);
+    EXPECT_EQ((r.lio.P - p.filter().P()).norm(), 0.0);
   }
   return t;
 }
@@ -91,9 +96,9 @@ TEST(PipelineResume, WithoutAnOutageTheRunIsTheUninterruptedOne) {
   runFrames(b, access_b, 0, k);
   ASSERT_TRUE(b.odometry().initialized());
   FramePipeline c(rec.cfg);
-  ASSERT_TRUE(c.resume(b.odometry().filterState(), {}, "the test"));
+  ASSERT_TRUE(c.resume(b.filter().snapshot(), {}, "the test"));
   EXPECT_NE(c.odometry().initMessage().find("resumed from the test"), std::string::npos) << c.odometry().initMessage();
-  EXPECT_FALSE(c.resume(b.odometry().filterState(), {}, "again")) << "only before the first frame";
+  EXPECT_FALSE(c.resume(b.filter().snapshot(), {}, "again")) << "only before the first frame";
   const Trajectory tail_c = runFrames(c, access_b, k, rec.frames.size());
   ASSERT_EQ(tail_c.size(), tail_a.size());
   double worst = 0;
@@ -111,7 +116,7 @@ TEST(PipelineResume, AcrossAnOutageTheImuBridgesIt) {
     InProcessMap access(map);
     runFrames(before, access, 0, k);
   }
-  const FilterState prior = before.odometry().filterState();
+  const FilterState prior = before.filter().snapshot();
   // The IMU samples after the state up to the first frame after the outage (what the map server holds).
   std::vector<ImuSample> imu;
   for (std::size_t i = k; i <= k + lost; ++i)

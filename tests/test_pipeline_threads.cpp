@@ -34,7 +34,9 @@ void expectSameForEveryThreadCount(const std::string& scenario, double duration_
   const sim::SimScenario sc = sim::loadScenarioFile(scenarioPath(scenario));
   const RunSummary one = runScenario(sc, duration_s, mode, {}, 1);
   ASSERT_GT(one.est.size(), 40u);
-  if (mode != "off") ASSERT_GT(one.visual_frames, 20u) << "the visual update must be exercised";
+  if (mode != "off") {
+    ASSERT_GT(one.visual_frames, 20u) << "the visual update must be exercised";
+  }
   for (int threads : {2, 3}) {
     const RunSummary many = runScenario(sc, duration_s, mode, {}, threads);
     ASSERT_EQ(many.est.size(), one.est.size()) << threads << " threads";

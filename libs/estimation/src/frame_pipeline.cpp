@@ -30,7 +30,8 @@ HybridMapConfig PipelineConfig::mapConfig() const {
 
 FramePipeline::FramePipeline(PipelineConfig cfg)
     : cfg_(std::move(cfg)),
-      lio_(cfg_.lio),
+      filter_(cfg_.lio.imu),
+      lio_(cfg_.lio, filter_),
       selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)),
       image_check_(cfg_.vio.pixel_noise) {
   if (cfg_.camera.enabled) {
@@ -65,9 +66,12 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   }
   // 7. The frame's end at its final state: slides and the memory cap in process, the update message
   // to the map server. Visual point pointers of this frame are not used beyond this point.
-  if (r.lio.initialized) map.finishFrame(frame, r);
-  if (!r.lio.initialized) time_offset_prior_set_ = false;  // a new start sets the prior again
-  if (cfg_.vio.estimate_time_offset && time_offset_prior_set_) {
+  if (r.lio.initialized) {
+    r.lio.state = filter_.x();  // the frame's output: the filter after every update of this frame
+    r.lio.P = filter_.P();
+    map.finishFrame(frame, r);
+  }
+  if (cfg_.vio.estimate_time_offset && r.lio.initialized && filter_.timeOffsetPriorSet()) {
     r.has_time_offset = true;
     r.time_offset_s = cfg_.preprocess.camera_time_offset_s + r.lio.state.time_offset_s;
     r.time_offset_sigma_s = std::sqrt(std::max(0.0, r.lio.P(sidx::kTimeOffset, sidx::kTimeOffset)));
@@ -125,8 +129,7 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
     r.map_seeded = true;
   }
   Stopwatch map_watch;
-  map.insertScan(lio_.worldPoints(r.lio.points), r);
-  lio_.markInserted(r.lio);
+  map.insertScan(lio_.scanForMap(r.lio), r);
   r.lio.map_ms = map_watch.elapsedMs();
 }
 
@@ -148,42 +151,28 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   }
   VisualMapOps* ops = map.visualMap(frame, r, lidar_failed ? &no_scan.frustum_keys : nullptr);
   if (ops == nullptr) return;  // no visual update without the map's points
-  NavState x = r.lio.state;
-  StateCov P = r.lio.P;
-  // The camera's time offset t_d: its prior at the first visual frame after initialisation, reset to it
-  // when the estimate leaves 3 prior sigmas (never left to pull the pose).
-  constexpr int td = sidx::kTimeOffset;
-  const double var_td = cfg_.vio.time_offset_sigma_s * cfg_.vio.time_offset_sigma_s;
-  const auto resetTimeOffset = [&] {
-    x.time_offset_s = 0.0;
-    P.row(td).setZero();
-    P.col(td).setZero();
-    P(td, td) = var_td;
-  };
-  bool prior_changed = false;
-  if (cfg_.vio.estimate_time_offset && !time_offset_prior_set_) {
-    resetTimeOffset();
-    time_offset_prior_set_ = prior_changed = true;
-  }
+  // The update acts on the filter in place; the covariance before it is the selector's reference.
+  const StateCov P_before = filter_.P();
+  // The camera's time offset t_d: its prior at the first visual frame after a start, reset to it when
+  // the estimate leaves 3 prior sigmas (never left to pull the pose).
+  if (cfg_.vio.estimate_time_offset && !filter_.timeOffsetPriorSet()) filter_.setTimeOffsetPrior(cfg_.vio.time_offset_sigma_s);
   CaptureMotion motion;  // the body rate at the image: the last IMU sample of the frame, bias removed
-  if (!frame.imu.empty()) motion.omega_imu = frame.imu.back().gyro - x.bg;
-  const VisualStepResult vs = runVisualStep(*ops, x, P, gray, *camera_, cfg_.camera.T_imu_camera, cfg_.vio,
-                                            frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get(), motion);
-  if (cfg_.vio.estimate_time_offset && !(std::abs(x.time_offset_s) <= 3.0 * cfg_.vio.time_offset_sigma_s)) {
-    resetTimeOffset();
-    prior_changed = r.reset_time_offset = true;
+  if (!frame.imu.empty()) motion.omega_imu = frame.imu.back().gyro - filter_.x().bg;
+  const VisualStepResult vs = runVisualStep(*ops, filter_.x(), filter_.P(), gray, *camera_, cfg_.camera.T_imu_camera,
+                                            cfg_.vio, frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get(),
+                                            motion);
+  if (cfg_.vio.estimate_time_offset && !(std::abs(filter_.x().time_offset_s) <= 3.0 * cfg_.vio.time_offset_sigma_s)) {
+    filter_.setTimeOffsetPrior(cfg_.vio.time_offset_sigma_s);
+    r.reset_time_offset = true;
     ++time_offset_resets_;
   }
-  if (vs.update.points_used > 0 || prior_changed) lio_.setState(x, P);
-  selector_.markUsed(x, r.lio.P, P);
+  selector_.markUsed(filter_.x(), P_before, filter_.P());
   r.visual_used = true;
   r.n_visual_points = vs.update.points_used;
   r.n_new_visual_points = vs.n_new_points;
   r.n_longterm_visual_points = vs.n_longterm_used;
   r.vio_rms_before = vs.update.rms_before;
   r.vio_rms_after = vs.update.rms_after;
-  r.lio.state = x;  // the frame's output is the posterior after the visual update
-  r.lio.P = P;
   r.vio_ms = std::max(0.0, watch.elapsedMs() - (r.link.wait_ms - wait_before));
 }
 

@@ -25,10 +25,9 @@ void LioOdometryConfig::load(const ConfigNode& root) {
   root.section("lio").get("min_matches", min_matches);
 }
 
-LioOdometry::LioOdometry(LioOdometryConfig cfg) : cfg_(std::move(cfg)), init_(cfg_.imu) {
-  motion_ = std::make_unique<MotionInitializer>(
-      cfg_.imu, cfg_.motion_init, cfg_.map, cfg_.lio, cfg_.min_matches,
-      [this](const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) { return preparePoints(sweep, trace); });
+LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(cfg)), filter_(filter), init_(cfg_.imu) {
+  motion_ = std::make_unique<MotionInitializer>(cfg_.imu, cfg_.motion_init, cfg_.map, cfg_.lio, cfg_.min_matches,
+                                                cfg_.T_imu_lidar);
 }
 
 LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
@@ -54,8 +53,10 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
   }
   // From motion, once the static search has given up (a static window observes the gyro bias).
   if (motion_converged && init_.noStaticWindow()) {
-    motion_->takeOver(x_, P_);
-    propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, motion_->accelScale());
+    NavState x;
+    StateCov P;
+    motion_->takeOver(x, P);
+    filter_.start(x, P, motion_->accelScale());
     std::ostringstream os;
     os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
        << "; " << motion_->describe();
@@ -69,7 +70,8 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
 bool LioOdometry::initCoarse(const Frame& frame) {
   NavState x;
   double tilt_sigma = 0, accel_scale = 1;
-  if (!init_.coarseState(x, P_, tilt_sigma, accel_scale)) return false;
+  StateCov P;
+  if (!init_.coarseState(x, P, tilt_sigma, accel_scale)) return false;
   const std::string waited = waitMessage();
   // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
   Vec3 v_body = Vec3::Zero();
@@ -81,15 +83,14 @@ bool LioOdometry::initCoarse(const Frame& frame) {
   x.v_world = x.R_world_imu * v_body;
   // State at the start of this frame's samples (predict() propagates through them).
   if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
-  P_.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-6;  // the origin
+  P.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-6;  // the origin
   // Speed: wide. Fixes that agree over two intervals may still slide together along a degenerate
   // direction (a wall, a corridor's axis), and without them the rig may move at a run's or a drone's
   // speed; a tight prior there holds a wrong velocity against the camera (random rigs 10 and 12 of the
   // matrix: 2 m/s instead of 0.3 took rig 10 from 53 m to 0.11 m ATE over 12 s).
   const double sv = std::max(2.0, 0.5 * v_body.norm());
-  P_.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
-  x_ = x;
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, accel_scale);
+  P.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
+  filter_.start(x, P, accel_scale);
   motion_.reset();
   std::ostringstream os;
   os.precision(3);
@@ -102,9 +103,7 @@ bool LioOdometry::initCoarse(const Frame& frame) {
 
 bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
   if (initialized_) return false;
-  x_ = prior.state;
-  P_ = prior.P;
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, prior.accel_scale);
+  filter_.start(prior.state, prior.P, prior.accel_scale, /*time_offset_prior_in_P=*/true);
   resume_imu_ = std::move(imu);
   motion_.reset();
   initialized_ = true;
@@ -120,11 +119,12 @@ bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, c
 }
 
 void LioOdometry::propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame) {
-  const Utime cut = frame.imu.empty() ? frame.utime : frame.imu.front().utime;
-  std::vector<ImuSample> before;
-  for (const auto& s : samples)
-    if (s.utime > x_.utime && s.utime < cut) before.push_back(s);
-  if (!before.empty() && cut > x_.utime) propagator_->propagate(x_, P_, before, cut, nullptr);
+  filter_.propagateBefore(samples, frame.imu.empty() ? frame.utime : frame.imu.front().utime);
+}
+
+void LioOdometry::recordState(LioFrameResult& r) const {
+  r.state = filter_.x();
+  r.P = filter_.P();
 }
 
 std::string LioOdometry::waitMessage() const {
@@ -151,58 +151,41 @@ LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
 }
 
 void LioOdometry::initAtRest(const Frame& frame) {
-  x_ = init_.initialState();
-  P_ = init_.initialCovariance();
-  propagator_ = std::make_unique<ImuPropagator>(cfg_.imu, init_.accelScale());
+  filter_.start(init_.initialState(), init_.initialCovariance(), init_.accelScale());
   // Through the samples after the chosen window.
   propagateUpToFrame(init_.samplesAfterWindow(), frame);
   motion_.reset();
   init_message_ = init_.describe();
 }
 
-std::vector<BodyPoint> LioOdometry::preparePoints(const LidarScan& sweep,
-                                                  const std::vector<ImuTracePoint>& trace) const {
-  // Undistort every point to the frame time, then downsample in the IMU frame (FAST-LIVO2 order).
-  std::vector<LidarPoint> undistorted = undistortToEnd(sweep, trace, cfg_.T_imu_lidar);
-  if (cfg_.lio.downsample_m > 0) undistorted = voxelDownsample(undistorted, static_cast<float>(cfg_.lio.downsample_m));
-  // Uniform subsampling beyond the point cap keeps the cost per frame bounded.
-  const std::size_t n = undistorted.size();
-  const std::size_t cap = static_cast<std::size_t>(cfg_.lio.max_points);
-  const double stride = n > cap ? double(n) / double(cap) : 1.0;
-  std::vector<BodyPoint> pts;
-  pts.reserve(std::min(n, cap));
-  const Mat3 R_il = cfg_.T_imu_lidar.linear();
-  const Pose T_lidar_imu = cfg_.T_imu_lidar.inverse();
-  for (double f = 0; f < double(n); f += stride) {
-    const LidarPoint& lp = undistorted[static_cast<std::size_t>(f)];
-    BodyPoint bp;
-    bp.p_imu = lp.p_lidar.cast<double>();
-    // Range/bearing covariance in the LiDAR frame, rotated into the IMU frame.
-    const Mat3 cov_l = pointCovarianceBody(T_lidar_imu * bp.p_imu, cfg_.lio.range_noise_m, cfg_.lio.beam_noise_deg);
-    bp.cov_imu = R_il * cov_l * R_il.transpose();
-    pts.push_back(bp);
-  }
-  return pts;
-}
-
-std::vector<PointWithCov> LioOdometry::worldPoints(const std::vector<BodyPoint>& pts) const {
+std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
+  const std::vector<BodyPoint>& pts = r.points;
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   // The first scan defines the map's frame: its geometry relative to that frame is as exact as the
   // LiDAR; the pose's uncertainty (a coarse start's tilt, the origin) is the state's, not the map's.
   StateCov first_scan_P;
   if (!map_started_) {
-    first_scan_P = P_;
+    first_scan_P = filter_.P();
     first_scan_P.block<3, 3>(sidx::kRot, sidx::kRot).setZero();
     first_scan_P.block<3, 3>(sidx::kPos, sidx::kPos).setZero();
   }
-  const WorldPointCovariance point_cov(x_, map_started_ ? P_ : first_scan_P);
+  const NavState& x = filter_.x();
+  const WorldPointCovariance point_cov(x, map_started_ ? filter_.P() : first_scan_P);
   for (const auto& bp : pts) {
     PointWithCov pw;
-    const Vec3 q = x_.R_world_imu * bp.p_imu;
-    pw.p_world = q + x_.p_world_imu;
+    const Vec3 q = x.R_world_imu * bp.p_imu;
+    pw.p_world = q + x.p_world_imu;
     pw.cov_world = point_cov(bp, q);
     world.push_back(pw);
+  }
+  if (!pts.empty()) {
+    r.map_started = !map_started_;
+    if (!map_started_ && free_gravity_) {
+      mapFrameFromFirstScan();
+      r.P = filter_.P();
+    }
+    map_started_ = true;
   }
   return world;
 }
@@ -222,17 +205,15 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
       r.initialized = true;
       r.points = std::move(motion_->points());
       r.n_points = static_cast<int>(r.points.size());
-      r.state = x_;
-      r.P = P_;
+      recordState(r);
       motion_.reset();
       map_started_ = false;  // the odometry's map starts with this frame's scan
       return true;
     }
   }
   r.initialized = true;
-  if (frame.utime <= x_.utime) {  // a frame inside the initialisation window: nothing to estimate yet
-    r.state = x_;
-    r.P = P_;
+  if (frame.utime <= filter_.x().utime) {  // a frame inside the initialisation window: nothing to estimate yet
+    recordState(r);
     return false;
   }
 
@@ -245,21 +226,20 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
 
   // 1b. Forward propagation to the frame time, keeping the per-sample trace.
   std::vector<ImuTracePoint> trace;
-  propagator_->propagate(x_, P_, frame.imu, frame.utime, &trace);
+  filter_.propagate(frame.imu, frame.utime, &trace);
 
   // 1c. Undistort + downsample the sweep, with per-point covariances.
-  r.points = preparePoints(frame.sweep, trace);
+  r.points = prepareScan(frame.sweep, trace, cfg_.T_imu_lidar, cfg_.lio);
   r.n_points = static_cast<int>(r.points.size());
-  r.state = x_;  // the prediction until update()
-  r.P = P_;
+  recordState(r);  // the prediction until update()
   return true;
 }
 
 void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool) {
   // 3. Iterated point-to-plane update against the map (skipped until the map has content).
   if (map_started_ && !r.points.empty()) {
-    NavState x = x_;
-    StateCov P = P_;
+    NavState x = filter_.x();
+    StateCov P = filter_.P();
     const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio, pool);
     r.n_matched = u.matched;
     r.iterations = u.iterations;
@@ -268,24 +248,13 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
     r.matched_index = u.matched_index;
     r.matched_normals = u.matched_normals;
     if (u.matched >= cfg_.min_matches) {
-      x_ = x;
-      P_ = P;
+      filter_.x() = x;
+      filter_.P() = P;
       r.lio_ok = true;
     }
   }
   r.lio_ms = watch_.elapsedMs();
-  r.state = x_;
-  r.P = P_;
-}
-
-void LioOdometry::markInserted(LioFrameResult& r) {
-  if (r.points.empty()) return;
-  r.map_started = !map_started_;
-  if (!map_started_ && free_gravity_) {
-    mapFrameFromFirstScan();
-    r.P = P_;
-  }
-  map_started_ = true;
+  recordState(r);
 }
 
 void LioOdometry::mapFrameFromFirstScan() {
@@ -299,11 +268,13 @@ void LioOdometry::mapFrameFromFirstScan() {
   using namespace sidx;
   StateCov T = StateCov::Identity();
   T.block<3, 3>(kRot, kRot).setZero();
-  T.block<3, 3>(kGrav, kRot) = hat(x_.g_world) * x_.R_world_imu;
-  T.block<3, 3>(kVel, kRot) = hat(x_.v_world) * x_.R_world_imu;
-  T.block<3, 3>(kPos, kRot) = hat(x_.p_world_imu) * x_.R_world_imu;
-  P_ = T * P_ * T.transpose();
-  P_.block<3, 3>(kRot, kRot) += Mat3::Identity() * 1e-10;  // positive definite
+  const NavState& x = filter_.x();
+  StateCov& P = filter_.P();
+  T.block<3, 3>(kGrav, kRot) = hat(x.g_world) * x.R_world_imu;
+  T.block<3, 3>(kVel, kRot) = hat(x.v_world) * x.R_world_imu;
+  T.block<3, 3>(kPos, kRot) = hat(x.p_world_imu) * x.R_world_imu;
+  P = T * P * T.transpose();
+  P.block<3, 3>(kRot, kRot) += Mat3::Identity() * 1e-10;  // positive definite
 }
 
 }  // namespace livo

@@ -24,8 +24,8 @@ void MotionInitConfig::load(const ConfigNode& n) {
 }
 
 MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio,
-                                     int min_matches, PreparePoints prepare)
-    : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), prepare_(std::move(prepare)),
+                                     int min_matches, const Pose& T_imu_lidar)
+    : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), T_imu_lidar_(T_imu_lidar),
       map_(std::make_unique<VoxelMap>(map)), first_map_(std::make_unique<VoxelMap>(map)), occupancy_(0.15, 5) {}
 
 namespace {
@@ -88,7 +88,7 @@ bool MotionInitializer::start(const Frame& frame) {
                                                Vec3::Zero(), Vec3::Zero());
   const Mat3 R_end_T = trace.back().R_world_imu.transpose();
   for (auto& tp : trace) tp.R_world_imu = R_end_T * tp.R_world_imu;
-  points_ = prepare_(frame.sweep, trace);
+  points_ = prepare(frame.sweep, trace);
   if (points_.empty()) return false;
   insert(points_, Mat3::Identity(), Vec3::Zero());
   {
@@ -190,7 +190,7 @@ void MotionInitializer::rebuildMap(bool final) {
   }
   map_->clear();
   occupancy_.clear();
-  insert(prepare_(first_sweep_, trace), Mat3::Identity(), Vec3::Zero());
+  insert(prepare(first_sweep_, trace), Mat3::Identity(), Vec3::Zero());
   if (final) {
     first_sweep_ = LidarScan{};
     rebuilt_ = true;
@@ -214,7 +214,7 @@ bool MotionInitializer::process(const Frame& frame) {
   Mat3 R_pred, R;
   Vec3 p_pred, p;
   std::vector<ImuTracePoint> trace = predictTrace(frame, R_pred, p_pred);
-  points_ = prepare_(frame.sweep, trace);
+  points_ = prepare(frame.sweep, trace);
   const Fix& last = fixes_.back();
   const double dt = std::max(1e-3, toSeconds(frame.utime - last.utime));
   if (fixes_.size() < 3 && !points_.empty()) {
@@ -227,7 +227,7 @@ bool MotionInitializer::process(const Frame& frame) {
       const bool settled = (v - v_cv_).norm() * dt < 0.05;
       v_cv_ = v;
       trace = predictTrace(frame, R_pred, p_pred);
-      points_ = prepare_(frame.sweep, trace);
+      points_ = prepare(frame.sweep, trace);
       if (settled || fixes_.size() > 1) break;
       rebuildMap(false);
     }
@@ -245,7 +245,7 @@ bool MotionInitializer::process(const Frame& frame) {
   {
     // The rest test's evidence: the scan undistorted at rest (gyro rotation, no translation) against
     // the first scan alone, at the first scan's position and at the fix.
-    const std::vector<BodyPoint> at_rest = prepare_(frame.sweep, rest_trace);
+    const std::vector<BodyPoint> at_rest = prepare(frame.sweep, rest_trace);
     fix.matches_at_origin = firstMapMatches(at_rest, R, Vec3::Zero(), p, &fix.shift_on_normals_m);
     fix.matches_at_fix = firstMapMatches(at_rest, R, p);
   }

@@ -1,5 +1,8 @@
 #include "livo/estimation/undistort.hpp"
 
+#include "livo/map/point_cov.hpp"
+#include "livo/sensors/downsample.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -86,6 +89,31 @@ std::vector<LidarPoint> undistortToEnd(const LidarScan& sweep, const std::vector
     out.push_back(q);
   }
   return out;
+}
+
+std::vector<BodyPoint> prepareScan(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace,
+                                   const Pose& T_imu_lidar, const LioConfig& lio) {
+  // Undistort every point to the frame time, then downsample in the IMU frame (FAST-LIVO2 order).
+  std::vector<LidarPoint> undistorted = undistortToEnd(sweep, trace, T_imu_lidar);
+  if (lio.downsample_m > 0) undistorted = voxelDownsample(undistorted, static_cast<float>(lio.downsample_m));
+  // Uniform subsampling beyond the point cap keeps the cost per frame bounded.
+  const std::size_t n = undistorted.size();
+  const std::size_t cap = static_cast<std::size_t>(lio.max_points);
+  const double stride = n > cap ? double(n) / double(cap) : 1.0;
+  std::vector<BodyPoint> pts;
+  pts.reserve(std::min(n, cap));
+  const Mat3 R_il = T_imu_lidar.linear();
+  const Pose T_lidar_imu = T_imu_lidar.inverse();
+  for (double f = 0; f < double(n); f += stride) {
+    const LidarPoint& lp = undistorted[static_cast<std::size_t>(f)];
+    BodyPoint bp;
+    bp.p_imu = lp.p_lidar.cast<double>();
+    // Range/bearing covariance in the LiDAR frame, rotated into the IMU frame.
+    const Mat3 cov_l = pointCovarianceBody(T_lidar_imu * bp.p_imu, lio.range_noise_m, lio.beam_noise_deg);
+    bp.cov_imu = R_il * cov_l * R_il.transpose();
+    pts.push_back(bp);
+  }
+  return pts;
 }
 
 }  // namespace livo

@@ -237,7 +237,7 @@ void EstimatorNode::refuseOtherConfig() const {
 }
 
 bool EstimatorNode::bridgeImuGap(Frame& frame) {
-  const Utime t_state = pipeline_.odometry().state().utime;
+  const Utime t_state = pipeline_.filter().x().utime;
   const double gap = toSeconds(frame.imu.front().utime - t_state);
   ++counters_.imu_gaps;
   std::ostringstream os;
@@ -307,7 +307,7 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   // after this estimator's last state.
   const double period_s = 1.0 / pipeline_.config().lio.imu.rate_hz;
   if (!resumed_now && pipeline_.odometry().initialized() && !q.frame.imu.empty() &&
-      toSeconds(q.frame.imu.front().utime - pipeline_.odometry().state().utime) > 3.0 * period_s)
+      toSeconds(q.frame.imu.front().utime - pipeline_.filter().x().utime) > 3.0 * period_s)
     bridgeImuGap(q.frame);
   const Frame& frame = q.frame;
   counters_.nonfinite_points += nonfinite;
@@ -351,7 +351,7 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   ++counters_.odometry_published;
   // The whole filter state, for an estimator that restarts (the map server keeps the latest).
   FilterSnapshot snap;
-  snap.filter = FilterState{f.lio.state, f.lio.P, pipeline_.odometry().filterState().accel_scale};
+  snap.filter = pipeline_.filter().snapshot();
   snap.frames = std::int64_t(counters_.frames);
   lcm_.publish(channels_.filter_state, toMsg(snap));
 

@@ -12,7 +12,9 @@
 //   6. on a selected image: the photometric update and the visual map's changes;
 //   7. the frame's end at its final state (map maintenance, or the update message to the map server).
 // Every decision of the frame (the image check, the degeneracy rule, the selector, when the visual
-// step runs) is taken here and nowhere else.
+// step runs) is taken here and nowhere else. The filter's state has one owner, the pipeline's Esikf
+// (esikf.hpp): steps 1 and 3 act on it through LioOdometry, step 6 in place; the frame's result
+// records it at step 7.
 #pragma once
 
 #include "livo/common/worker_pool.hpp"
@@ -41,15 +43,15 @@ class FramePipeline {
   /// Continues another estimator's run from its last state (LioOdometry::resume; the covariance holds
   /// t_d's prior already). Before the first frame only: false once initialised.
   bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
-    if (!lio_.resume(prior, std::move(imu), source)) return false;
-    time_offset_prior_set_ = true;
-    return true;
+    return lio_.resume(prior, std::move(imu), source);
   }
 
   const PipelineConfig& config() const { return cfg_; }
   /// The camera model at the processing scale (null without a camera).
   const CameraModel* camera() const { return camera_.get(); }
   const LioOdometry& odometry() const { return lio_; }
+  /// The filter's state after the last frame (its snapshot() is what a restarted estimator resumes from).
+  const Esikf& filter() const { return filter_; }
   std::size_t framesProcessed() const { return frames_; }
   /// Frame images whose size does not match the camera calibration (never used by the visual update).
   std::size_t imagesWrongSize() const { return image_counters_.wrong_size; }
@@ -69,6 +71,7 @@ class FramePipeline {
   void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r, bool lidar_failed);
 
   PipelineConfig cfg_;
+  Esikf filter_;  ///< the one filter state; lio_ and visualStep act on it
   LioOdometry lio_;
   FrameSelector selector_;
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
@@ -77,7 +80,6 @@ class FramePipeline {
   VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
   std::size_t frames_ = 0;
-  bool time_offset_prior_set_ = false;  ///< t_d's prior is in P (since the last initialisation)
   std::size_t time_offset_resets_ = 0;
 };
 

@@ -4,6 +4,7 @@
 
 #include "livo/common/config.hpp"
 #include "livo/common/timing.hpp"
+#include "livo/estimation/esikf.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/imu_init.hpp"
 #include "livo/estimation/motion_init.hpp"
@@ -30,21 +31,13 @@ struct LioOdometryConfig {
   void load(const ConfigNode& root);
 };
 
-/// The whole filter state after a frame: what a restarted estimator needs to continue in the same world
-/// frame (LioOdometry::filterState / resume).
-struct FilterState {
-  NavState state;
-  StateCov P = StateCov::Zero();
-  double accel_scale = 1.0;  ///< accelerometer units found at initialisation (ImuPropagator)
-};
-
 /// What one frame produced (LiDAR-inertial part).
 struct LioFrameResult {
   Utime utime = 0;
   bool initialized = false;  ///< false while the IMU initialisation is collecting samples
   bool lio_ok = false;       ///< the LiDAR update ran with enough matches
   bool map_started = false;  ///< this frame created the first map content
-  NavState state;            ///< posterior at the frame time
+  NavState state;            ///< the filter's state at the end of the step that wrote it (a record)
   StateCov P = StateCov::Zero();
   int n_raw_points = 0;
   int n_points = 0;          ///< downsampled points used
@@ -62,8 +55,10 @@ struct LioFrameResult {
 class LioOdometry {
  public:
   /// The map is not held here: the per-frame pipeline (frame_pipeline.hpp) hands update() the planes
-  /// to match and inserts worldPoints() into the map itself (map_access.hpp).
-  explicit LioOdometry(LioOdometryConfig cfg);
+  /// to match and inserts scanForMap() into the map itself (map_access.hpp). The state is not held
+  /// here either: `filter` (the pipeline's) is started by the initialisation and acted on by predict()
+  /// and update(); it must outlive this object.
+  LioOdometry(LioOdometryConfig cfg, Esikf& filter);
 
   // The LiDAR-inertial phases of a frame, in this order:
   /// Step 1: initialisation (at rest: imu_init.hpp; else from motion: motion_init.hpp), propagation
@@ -74,13 +69,12 @@ class LioOdometry {
   /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
   /// r.P, r.lio_ms (since predict()) and the match results. `pool`: threads of the association.
   void update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool = nullptr);
-  /// World points with covariance at the current posterior (what step 3 inserts into the map).
-  std::vector<PointWithCov> worldPoints(const std::vector<BodyPoint>& pts) const;
-  /// Records that the frame's points went into the map (enables update() from the next frame on).
-  /// After a coarse start in geometry that constrains every direction, the first scan defines the map
-  /// frame: the attitude's tilt uncertainty moves to gravity's direction in that frame
-  /// (mapFrameFromFirstScan; r.P is updated).
-  void markInserted(LioFrameResult& r);
+  /// Step 3's insertion: the frame's points in the world with their covariance at the filter's
+  /// posterior, for the map. From then on the map holds a scan (update() runs from the next frame on).
+  /// The first scan defines the map frame: its points carry no pose covariance, and after a coarse
+  /// start in geometry that constrains every direction the attitude's tilt uncertainty moves to
+  /// gravity's direction in that frame (mapFrameFromFirstScan; r.P is updated).
+  std::vector<PointWithCov> scanForMap(LioFrameResult& r);
 
   /// Starts from another estimator's last state instead of initialising (a restart in the middle of a
   /// run: the map already holds that estimator's scans). `imu`: the samples after prior.state.utime
@@ -88,19 +82,9 @@ class LioOdometry {
   /// outage costs only the IMU's drift over it. Before the first frame only; returns false (and does
   /// nothing) once initialised.
   bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source);
-  /// The state after the last frame, with its covariance and the accelerometer units (after initialized()).
-  FilterState filterState() const { return FilterState{x_, P_, propagator_ ? propagator_->accelScale() : 1.0}; }
-
   /// True once a scan went into the map (update() runs from then on).
   bool mapStarted() const { return map_started_; }
-  /// Replaces the posterior (after a later update at the same time stamp, e.g. the visual one).
-  void setState(const NavState& x, const StateCov& P) {
-    x_ = x;
-    P_ = P;
-  }
   const LioOdometryConfig& config() const { return cfg_; }
-  const NavState& state() const { return x_; }
-  const StateCov& covariance() const { return P_; }
   bool initialized() const { return initialized_; }
   /// How the IMU was initialised (after initialized()), or what it waits for.
   const std::string& initMessage() const { return init_message_; }
@@ -108,7 +92,6 @@ class LioOdometry {
   std::string waitMessage() const;
 
  private:
-  std::vector<BodyPoint> preparePoints(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const;
   enum class InitStep { Waiting, AtRest, InMotion, Coarse };
   /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
   /// propagator when one of them is done.
@@ -122,16 +105,16 @@ class LioOdometry {
   /// x_ / P_ through the samples of `samples` after x_'s time and before this frame's own samples
   /// begin (the frame's propagation keeps its trace for the undistortion).
   void propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame);
+  /// r.state / r.P: the filter's, as this step leaves them.
+  void recordState(LioFrameResult& r) const;
 
   LioOdometryConfig cfg_;
+  Esikf& filter_;
   ImuInitializer init_;
   std::unique_ptr<MotionInitializer> motion_;  ///< until initialised
   bool initialized_ = false;
   int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
-  std::unique_ptr<ImuPropagator> propagator_;
   std::vector<ImuSample> resume_imu_;  ///< resume(): samples to propagate through before the next frame's
-  NavState x_;
-  StateCov P_ = initialCovariance();
   Utime last_imu_fed_ = -1;
   void mapFrameFromFirstScan();
   bool map_started_ = false;

@@ -31,6 +31,7 @@
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/estimation/state.hpp"
+#include "livo/estimation/undistort.hpp"
 #include "livo/map/occupancy_search.hpp"
 #include "livo/map/voxel_map.hpp"
 
@@ -59,10 +60,9 @@ class MotionInitializer {
   /// (a single wall's along-wall direction has about 0.02; random rig 5's street with clutter 0.13).
   static constexpr double kConstrainedShare = 0.1;
 
-  /// `prepare` undistorts and downsamples a sweep along an IMU trace (the odometry's own step 1c).
-  using PreparePoints = std::function<std::vector<BodyPoint>(const LidarScan&, const std::vector<ImuTracePoint>&)>;
+  /// Sweeps are prepared as the odometry's step 1c (prepareScan, undistort.hpp) with `T_imu_lidar`.
   MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio, int min_matches,
-                    PreparePoints prepare);
+                    const Pose& T_imu_lidar);
 
   /// Runs one frame (time order). Returns converged(): the caller may then takeOver() (or go on
   /// feeding frames, e.g. while a static window may still come).
@@ -140,7 +140,10 @@ class MotionInitializer {
   MotionInitConfig cfg_;
   LioConfig lio_;
   int min_matches_;
-  PreparePoints prepare_;
+  Pose T_imu_lidar_;
+  std::vector<BodyPoint> prepare(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace) const {
+    return prepareScan(sweep, trace, T_imu_lidar_, lio_);
+  }
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<VoxelMap> first_map_;  ///< the first scan alone, at rest (the rest test's reference)
   OccupancyPyramid occupancy_;     ///< of map_'s points while the first fixes are searched

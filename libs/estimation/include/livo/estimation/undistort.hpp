@@ -3,6 +3,7 @@
 
 #include "livo/common/types.hpp"
 #include "livo/estimation/imu.hpp"
+#include "livo/estimation/lio_update.hpp"
 
 #include <vector>
 
@@ -14,5 +15,12 @@ namespace livo {
 /// `p_lidar` of the output holds the IMU-frame position at the end time.
 std::vector<LidarPoint> undistortToEnd(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace,
                                        const Pose& T_imu_lidar);
+
+/// Step 1c of a frame (frame_pipeline.hpp), for the odometry and the motion initialiser alike: the
+/// sweep undistorted to the trace's end (undistortToEnd), voxel-downsampled at lio.downsample_m in the
+/// IMU frame, uniformly subsampled beyond lio.max_points, each point with its range/bearing covariance
+/// rotated into the IMU frame.
+std::vector<BodyPoint> prepareScan(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace,
+                                   const Pose& T_imu_lidar, const LioConfig& lio);
 
 }  // namespace livo
