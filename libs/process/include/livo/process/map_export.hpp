@@ -46,7 +46,8 @@ struct MapExportConfig {
   int octomap_queue_scans = 8;
   /// The OctoMap's memory, MB (its nodes with malloc's overhead, checked whenever the tree grew by
   /// 5 %): at the cap the tree stops growing and later scans are left out of map.bt (counted;
-  /// map.pcd keeps them). Free space dominates: the 2.1 km street at 0.2 m needs ~2.7 GB. 0: no cap.
+  /// map.pcd keeps them). Free space dominates the tree (outdoors at 0.2 m it fills within a few dozen
+  /// scans; config/README.md). 0: no cap.
   double octomap_max_mb = 512.0;
 
   /// Reads the keys above from the `exporter` section; throws ConfigError naming the key.
