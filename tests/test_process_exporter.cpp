@@ -281,6 +281,22 @@ TEST(MapCloud, VoxelCentroidsAndColoursMatchBruteForce) {
   }
 }
 
+namespace {
+
+/// MapExportConfig::load of `exporter: {KEY_VALUE}` throws a ConfigError naming `name`.
+void expectExporterKeyRefused(const std::string& key_value, const std::string& name) {
+  ConfigFile file = ConfigFile::parse("exporter: {" + key_value + "}\n", "rig.yaml");
+  MapExportConfig loaded;
+  try {
+    loaded.load(file.root().section("exporter"));
+    ADD_FAILURE() << key_value << " was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+
 TEST(MapCloud, CapOnPointsAndNonFiniteInputAreCounted) {
   MapExportConfig cfg;
   cfg.map_voxel_m = 1.0;
@@ -297,14 +313,7 @@ TEST(MapCloud, CapOnPointsAndNonFiniteInputAreCounted) {
   MapExportConfig bad;
   bad.octomap_every_n = 0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
-  ConfigFile file = ConfigFile::parse("exporter: {map_voxel_m: -1}\n", "rig.yaml");
-  MapExportConfig loaded;
-  try {
-    loaded.load(file.root().section("exporter"));
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("exporter.map_voxel_m"), std::string::npos) << e.what();
-  }
+  expectExporterKeyRefused("map_voxel_m: -1", "exporter.map_voxel_m");
 }
 
 TEST(OccupancyMap, MemoryCapStopsTheTreeGrowingAndCountsTheScansLeftOut) {
@@ -343,14 +352,7 @@ TEST(OccupancyMap, MemoryCapStopsTheTreeGrowingAndCountsTheScansLeftOut) {
   EXPECT_LT(capped.memoryBytes(), 1.05 * cfg.octomap_max_mb * 1024 * 1024 + 2 * per_scan);
   EXPECT_NE(capped.capNote().find("map.bt stopped growing at exporter.octomap_max_mb"), std::string::npos)
       << capped.capNote();
-  ConfigFile file = ConfigFile::parse("exporter: {octomap_max_mb: -1}\n", "rig.yaml");
-  MapExportConfig loaded;
-  try {
-    loaded.load(file.root().section("exporter"));
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("exporter.octomap_max_mb"), std::string::npos) << e.what();
-  }
+  expectExporterKeyRefused("octomap_max_mb: -1", "exporter.octomap_max_mb");
 }
 
 // ---------------------------------------------------------------- speed (opt-in)
