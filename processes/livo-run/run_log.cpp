@@ -286,7 +286,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
                                            {"threads", std::to_string(args.threads)},
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
-  if (!sink.occupancy.capNote().empty()) notes["map_bt"] = sink.occupancy.capNote();
+  if (const std::string note = sink.occupancy.capNote(); !note.empty()) notes["map_bt"] = note;
   if (!sink.health.anyPose())
     sink.health.no_pose_reason = outputs.frames() == 0 ? "no complete frame in the log (LiDAR scans with IMU samples)"
                                                         : "never initialised: " + sink.last_wait;

@@ -185,7 +185,7 @@ void ExporterNode::finish() {
     counters_["octomap_scans_dropped"] = double(occupancy_.scansDropped());
     counters_["octomap_scans_capped"] = double(occupancy_.scansCapped());
     counters_["octomap_mb"] = occupancy_.memoryBytes() / (1024.0 * 1024.0);
-    if (!occupancy_.capNote().empty()) notes["map_bt"] = occupancy_.capNote();
+    if (const std::string note = occupancy_.capNote(); !note.empty()) notes["map_bt"] = note;
   }
   outputs_.writeStats(ms, bytesToMb(peakRssBytes()), counters_, notes, &health_);
 }
@@ -202,7 +202,7 @@ std::string ExporterNode::summary() const {
   os << outputs_.summary(bytesToMb(peakRssBytes()));
   os << "map.pcd " << cloud_.size() << " points (" << cloud_.voxelsColored() << " coloured, " << cloud_.pointsDropped()
      << " dropped), map.bt " << occupancy_.scansInserted() << " scans\n";
-  if (!occupancy_.capNote().empty()) os << occupancy_.capNote() << "\n";
+  if (const std::string note = occupancy_.capNote(); !note.empty()) os << note << "\n";
   os << "messages:\n" << lcm_.countersSummary();
   for (const auto& [k, v] : counters_)
     if (k.find("late") != std::string::npos || k.find("without") != std::string::npos)

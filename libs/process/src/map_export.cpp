@@ -182,6 +182,10 @@ OccupancyMap::~OccupancyMap() {
 void OccupancyMap::insertScan(const Eigen::Vector3d& p_world_sensor, const std::vector<Eigen::Vector3f>& p_world) {
   if ((calls_++ % std::uint64_t(cfg_.octomap_every_n)) != 0) return;
   if (!p_world_sensor.allFinite()) return;
+  if (capped_) {  // no copy into the queue for a scan the tree will not take
+    ++capped_scans_;
+    return;
+  }
   if (!worker_.joinable()) {
     insertNow(Job{p_world_sensor, p_world});
     return;
@@ -208,7 +212,7 @@ std::string OccupancyMap::capNote() const {
   if (!capped_) return "";
   std::ostringstream os;
   os << "map.bt stopped growing at exporter.octomap_max_mb (" << cfg_.octomap_max_mb << " MB) after scan "
-     << capped_at_scan_.load() << "; " << capped_scans_.load() << " later scans are not in it (map.pcd has them)";
+     << inserted_.load() << "; " << capped_scans_.load() << " later scans are not in it (map.pcd has them)";
   return os.str();
 }
 
@@ -228,10 +232,7 @@ void OccupancyMap::insertNow(const Job& job) {
   // The memory cap: counting the leaves walks the tree, so only after the tree grew by 5 %.
   if (cfg_.octomap_max_mb > 0.0 && tree_->size() >= next_check_nodes_) {
     const double bytes = treeBytes();
-    if (bytes > cfg_.octomap_max_mb * 1024.0 * 1024.0) {
-      capped_ = true;
-      capped_at_scan_ = inserted_.load();
-    }
+    if (bytes > cfg_.octomap_max_mb * 1024.0 * 1024.0) capped_ = true;  // inserted_ stays the scan it stopped at
     next_check_nodes_ = tree_->size() + tree_->size() / 20 + 1;
   }
 }

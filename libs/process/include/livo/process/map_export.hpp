@@ -101,7 +101,7 @@ class OccupancyMap {
   std::uint64_t scansDropped() const { return dropped_; }  ///< by a full queue
   /// Scans left out because the tree reached octomap_max_mb, and the scan count at which it did (0: not reached).
   std::uint64_t scansCapped() const { return capped_scans_; }
-  std::uint64_t cappedAtScan() const { return capped_at_scan_; }
+  std::uint64_t cappedAtScan() const { return capped_ ? inserted_.load() : 0; }
   /// Empty until the cap was reached; then what map.bt leaves out, for stats.json notes and summaries.
   std::string capNote() const;
   /// The tree's memory as the cap counts it, bytes (walks the tree: waits for the queue first).
@@ -129,7 +129,7 @@ class OccupancyMap {
   MapExportConfig cfg_;
   std::unique_ptr<octomap::OcTree> tree_;
   std::uint64_t calls_ = 0;
-  std::atomic<std::uint64_t> inserted_{0}, dropped_{0}, capped_scans_{0}, capped_at_scan_{0};
+  std::atomic<std::uint64_t> inserted_{0}, dropped_{0}, capped_scans_{0};
   std::atomic<bool> capped_{false};
   std::size_t next_check_nodes_ = 0;  ///< tree size at which the cap is checked next (worker only)
   // Worker: jobs_ and busy_ under mutex_; the tree belongs to the worker while it runs a job.
