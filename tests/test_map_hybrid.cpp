@@ -463,7 +463,7 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   R_wc << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   Pose T_wc = Pose::Identity();
   T_wc.linear() = R_wc;
-  const ImageGrid grid = map.visual().gridFor(*cam);
+  const ImageGrid grid = selectionGrid(*cam, map.visual().local().config().grid_cell_px);
   map.update(Vec3(0, 0, 0));
   // One point per grid cell centre (cells 30 px apart: no occlusion between them), depth 4 m (stays
   // local) or 30 m (moves to the long-term map when the cube slides to x = -15).
@@ -482,21 +482,23 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   map.update(Vec3(-15, 0, 0));  // cube [-35, 5] in x
   ASSERT_GT(map.visual().longterm().size(), 50u);
   ASSERT_GT(map.visual().local().size(), 50u);
-  std::vector<Vec2> pixels;
-  const std::vector<VisualPoint*> got = map.visual().pointsInView(*cam, T_wc, scan, &pixels);
+  const VisualRetrieval r = map.visual().retrieve(*cam, T_wc, scan);
+  const std::vector<VisualPoint*>& got = r.points;
+  const std::vector<Vec2>& pixels = r.pixels;
   ASSERT_EQ(got.size(), cell_id.size());
   ASSERT_EQ(pixels.size(), got.size());
   std::size_t k = 0, from_lt = 0;
   for (const auto& [cell, want] : cell_id) {  // ordered by cell
     EXPECT_EQ(got[k]->id, want);
     EXPECT_EQ(grid.cellOf(pixels[k]), cell);
-    EXPECT_TRUE(map.visual().occupiedCells()[std::size_t(cell)]);
+    EXPECT_TRUE(r.occupied[std::size_t(cell)]);
     from_lt += map.visual().isLongterm(*got[k]);
     ++k;
   }
   EXPECT_EQ(from_lt, map.visual().longterm().size());
-  EXPECT_EQ(map.visual().lastRetrievalLongterm(), from_lt);
-  EXPECT_EQ(map.visual().lastRetrieval().selected, got.size());
+  EXPECT_EQ(r.longterm, from_lt);
+  EXPECT_EQ(r.stats.selected, got.size());
+  EXPECT_EQ(std::count(r.occupied.begin(), r.occupied.end(), true), long(got.size()));
   // Per cell, the nearer of the two maps' winners: add a local point at depth 3 m next to a
   // long-term winner (12 px away), then it wins that cell.
   const VisualPoint* lt_point = nullptr;
@@ -510,7 +512,7 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   ASSERT_TRUE(map.visual().local().insert(visualPoint(100000, near)));
   scan.push_back(near);
   const std::int64_t lt_id = lt_point->id;
-  const std::vector<VisualPoint*> got2 = map.visual().pointsInView(*cam, T_wc, scan);
+  const std::vector<VisualPoint*> got2 = map.visual().retrieve(*cam, T_wc, scan).points;
   ASSERT_EQ(got2.size(), got.size());
   bool found_near = false, found_lt = false;
   for (VisualPoint* p : got2) {
@@ -525,8 +527,18 @@ TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
     if (map.visual().isLongterm(*p)) victim = p;
   ASSERT_NE(victim, nullptr);
   const std::int64_t victim_id = victim->id;
-  for (int i = 0; i <= map.visual().local().config().max_bad_updates; ++i) map.visual().reportPhotometricError(*victim, 1e6, 1.0);
+  Image gray;  // a flat image: observe() reports the error whether or not it adds the observation
+  gray.width = cc.width;
+  gray.height = cc.height;
+  gray.row_stride = cc.width;
+  gray.data.assign(std::size_t(cc.width) * std::size_t(cc.height), 128);
+  Vec2 victim_px;
+  ASSERT_TRUE(cam->project(T_wc.inverse() * victim->p_world, victim_px));
+  const std::size_t local_before = map.visual().local().size();
+  for (int i = 0; i <= map.visual().local().config().max_bad_updates; ++i)
+    map.visual().observe(*victim, 1e6, 1.0, gray, T_wc, victim_px, 1.f, Utime(i + 1), nullptr);
   EXPECT_EQ(map.visual().removeBadPoints(), 1u);
+  EXPECT_EQ(map.visual().local().size(), local_before);
   EXPECT_EQ(map.visual().longterm().find(victim_id), nullptr);
 }
 

@@ -200,7 +200,7 @@ TEST(VisualCreation, ShiTomasiPicksTexturedCandidatePerFreeCell) {
   const Image noise = noiseImage(kW, kH, 21);
   const Image im = makeImage(kW, kH, [&](double x, double y) { return x < 315 ? 100.0 : pixelAt(noise, int(x), int(y)); });
   VisualMap map;
-  const ImageGrid grid = map.gridFor(*cam);
+  const ImageGrid grid = selectionGrid(*cam, map.config().grid_cell_px);
   const Pose T_wc = Pose::Identity();
   // Cell [300, 330) x [240, 270): one flat and one textured candidate; cell [60, 90) x [60, 90) only a flat one.
   const Vec2 flat_px(305.0, 250.0), textured_px(322.0, 252.0), flat_only_px(70.0, 70.0);
@@ -271,7 +271,7 @@ TEST(VisualCreation, RejectsCandidatesBehindOrTooCloseAndOutsideBorder) {
   EXPECT_EQ(fmap.addPoints(im, *fisheye, T_wc, 1.f, 0, fc_cands, {}), 1);
   fmap.forEach([&](const VisualPoint& p) { EXPECT_GT(p.p_world.z(), 0.0); });
   fmap.insert(simplePoint(1000, behind_cam));
-  const auto seen = fmap.pointsInView(*fisheye, T_wc, {behind_cam, fc_cands[1].p_world}, nullptr);
+  const auto seen = fmap.retrieve(*fisheye, T_wc, {behind_cam, fc_cands[1].p_world}).points;
   ASSERT_EQ(seen.size(), 1u);
   EXPECT_NE(seen[0]->id, 1000);
 }
@@ -283,11 +283,11 @@ struct Expected {
   Vec2 px;
 };
 
-// Brute force over every point of the map (docs/algorithms.md 4.2 as specified in VisualMap::pointsInView).
+// Brute force over every point of the map (docs/algorithms.md 4.2 as specified in VisualMap::retrieve).
 std::map<int, Expected> bruteForceInView(const VisualMap& map, const CameraModel& cam, const Pose& T_wc,
                                          const std::vector<Vec3>& scan) {
   const VisualMapConfig& cfg = map.config();
-  const ImageGrid grid = map.gridFor(cam);
+  const ImageGrid grid = selectionGrid(cam, map.config().grid_cell_px);
   const Pose T_cw = T_wc.inverse();
   auto key = [&](const Vec3& p) {
     return std::array<long, 3>{long(std::floor(p.x() / cfg.voxel_size_m)), long(std::floor(p.y() / cfg.voxel_size_m)),
@@ -332,7 +332,7 @@ TEST(VisualRetrieval, MatchesBruteForceProjectionOfAllPoints) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> ux(-8, 8), uy(-6, 6), uz(-2, 15), jitter(-0.03, 0.03);
   VisualMap map;
-  const ImageGrid grid = map.gridFor(*cam);
+  const ImageGrid grid = selectionGrid(*cam, map.config().grid_cell_px);
   const Pose T_wc = Pose(Eigen::Translation3d(-1.3, 0.7, -2.2)) * Pose(Eigen::AngleAxisd(0.4, Vec3(0.2, 1, 0.1).normalized()));
   std::vector<Vec3> scan;
   for (int i = 0; i < 1500; ++i) {
@@ -341,22 +341,26 @@ TEST(VisualRetrieval, MatchesBruteForceProjectionOfAllPoints) {
     if (i % 10 < 7) scan.push_back(p + Vec3(jitter(rng), jitter(rng), jitter(rng)));
   }
   for (int i = 0; i < 800; ++i) scan.push_back(T_wc * Vec3(ux(rng), uy(rng), uz(rng)));
-  std::vector<Vec2> pixels;
-  const std::vector<VisualPoint*> got = map.pointsInView(*cam, T_wc, scan, &pixels);
+  const VisualRetrieval r = map.retrieve(*cam, T_wc, scan);
+  const std::vector<VisualPoint*>& got = r.points;
+  const std::vector<Vec2>& pixels = r.pixels;
   const std::map<int, Expected> expected = bruteForceInView(map, *cam, T_wc, scan);
   ASSERT_EQ(got.size(), pixels.size());
   ASSERT_EQ(got.size(), expected.size());
   EXPECT_GT(got.size(), 50u);
-  EXPECT_GT(map.lastRetrieval().occluded, 0u);
+  EXPECT_GT(r.stats.occluded, 0u);
+  EXPECT_EQ(r.stats.selected, got.size());
+  EXPECT_EQ(r.grid.size(), grid.size());
+  EXPECT_EQ(r.longterm, 0u);
   std::size_t k = 0;
   for (const auto& kv : expected) {  // both ordered by cell
     EXPECT_EQ(got[k]->id, kv.second.id);
     EXPECT_LT((pixels[k] - kv.second.px).norm(), 1e-9);
     EXPECT_EQ(grid.cellOf(pixels[k]), kv.first);
-    EXPECT_TRUE(map.occupiedCells()[std::size_t(kv.first)]);
+    EXPECT_TRUE(r.occupied[std::size_t(kv.first)]);
     ++k;
   }
-  EXPECT_EQ(std::count(map.occupiedCells().begin(), map.occupiedCells().end(), true), long(expected.size()));
+  EXPECT_EQ(std::count(r.occupied.begin(), r.occupied.end(), true), long(expected.size()));
 }
 
 TEST(VisualRetrieval, FloorKeysNearNegativeVoxelBorders) {
@@ -368,7 +372,7 @@ TEST(VisualRetrieval, FloorKeysNearNegativeVoxelBorders) {
   EXPECT_EQ(map.keyOf(Vec3(-0.05, -0.3, 3.1)).x, -1);
   auto ids = [&](const std::vector<Vec3>& scan) {
     std::set<std::int64_t> s;
-    for (VisualPoint* p : map.pointsInView(*cam, Pose::Identity(), scan, nullptr)) s.insert(p->id);
+    for (VisualPoint* p : map.retrieve(*cam, Pose::Identity(), scan).points) s.insert(p->id);
     return s;
   };
   EXPECT_EQ(ids({Vec3(-0.45, -0.05, 3.4)}), (std::set<std::int64_t>{1}));
@@ -386,9 +390,9 @@ TEST(VisualRetrieval, OcclusionBySyntheticDepth) {
     map.insert(simplePoint(7, p));
     std::vector<Vec3> scan = {p};  // the wall point selects the voxel
     scan.insert(scan.end(), occluders.begin(), occluders.end());
-    const std::size_t n = map.pointsInView(*cam, T_wc, scan, nullptr).size();
-    const ImageGrid grid = map.gridFor(*cam);
-    EXPECT_EQ(map.occupiedCells()[std::size_t(grid.cellOf(px))], n == 1);
+    const VisualRetrieval r = map.retrieve(*cam, T_wc, scan);
+    const std::size_t n = r.points.size();
+    EXPECT_EQ(r.occupied[std::size_t(r.grid.cellOf(px))], n == 1);
     return n;
   };
   EXPECT_EQ(run({}), 1u);
@@ -417,14 +421,17 @@ TEST(VisualRetrieval, TimingFor1000PointsInView) {
   }
   std::vector<double> ms;
   std::size_t selected = 0;
+  VisualRetrievalStats stats;
   for (int rep = 0; rep < 20; ++rep) {
     Stopwatch sw;
-    selected = map.pointsInView(*cam, T_wc, scan, nullptr).size();
+    const VisualRetrieval r = map.retrieve(*cam, T_wc, scan);
     ms.push_back(sw.elapsedMs());
+    selected = r.points.size();
+    stats = r.stats;
   }
   const SampleSummary s = summarize(ms);
-  std::cout << "[figure] pointsInView: 1000 map points, " << scan.size() << " scan points, "
-            << map.lastRetrieval().visual_voxels << " visual voxels searched, " << map.lastRetrieval().in_image
+  std::cout << "[figure] retrieve: 1000 map points, " << scan.size() << " scan points, "
+            << stats.visual_voxels << " visual voxels searched, " << stats.in_image
             << " in image, " << selected << " selected: median " << s.median << " ms, max " << s.max << " ms\n";
   EXPECT_GT(selected, 100u);
 }

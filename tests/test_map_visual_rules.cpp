@@ -311,20 +311,20 @@ TEST(VisualHousekeeping, BytesExtractInsertAndBox) {
   // Extract / insert round trip: same point, same id, found again by retrieval.
   std::vector<Vec3> scan;
   map.forEach([&](const VisualPoint& p) { scan.push_back(p.p_world); });
-  const std::size_t in_view = map.pointsInView(*cam, Pose::Identity(), scan, nullptr).size();
-  const std::int64_t id = map.pointsInView(*cam, Pose::Identity(), scan, nullptr).front()->id;
+  const std::size_t in_view = map.retrieve(*cam, Pose::Identity(), scan).points.size();
+  const std::int64_t id = map.retrieve(*cam, Pose::Identity(), scan).points.front()->id;
   std::unique_ptr<VisualPoint> out = map.extract(id);
   ASSERT_NE(out, nullptr);
   EXPECT_EQ(map.find(id), nullptr);
   EXPECT_EQ(map.size(), std::size_t(created) - 1);
   EXPECT_LT(map.bytes(), full);
-  EXPECT_EQ(map.pointsInView(*cam, Pose::Identity(), scan, nullptr).size(), in_view - 1);
+  EXPECT_EQ(map.retrieve(*cam, Pose::Identity(), scan).points.size(), in_view - 1);
   const VisualPoint* raw = out.get();
   const Vec3 pos = out->p_world;
   EXPECT_TRUE(map.insert(std::move(out)));
   EXPECT_EQ(map.find(id), raw);
   EXPECT_EQ(map.find(id)->p_world, pos);
-  EXPECT_EQ(map.pointsInView(*cam, Pose::Identity(), scan, nullptr).size(), in_view);
+  EXPECT_EQ(map.retrieve(*cam, Pose::Identity(), scan).points.size(), in_view);
   EXPECT_FALSE(map.insert(std::make_unique<VisualPoint>(*raw)));  // id taken
   EXPECT_FALSE(map.insert(nullptr));
   auto far = std::make_unique<VisualPoint>();

@@ -52,7 +52,7 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   // is initialised or inside its window).
   if (lio_.predict(frame, r.lio)) {
     // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
-    const PlaneFinder& planes = map.planesFor(frame, r);
+    const PlaneFinder& planes = map.planesFor(frame, r.lio);
     lidarStep(map, planes, r);
     // 4. Degeneracy: sigma_min of the matched normals below the threshold for several frames in a
     // row, or a LiDAR update that failed (the camera is then the only exteroceptive sensor left).
@@ -69,7 +69,9 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   if (r.lio.initialized) {
     r.lio.state = filter_.x();  // the frame's output: the filter after every update of this frame
     r.lio.P = filter_.P();
-    map.finishFrame(frame, r);
+    const MapFrameReport report = map.finishFrame(frame, r.lio.state);
+    r.map = report.update;
+    r.link = report.link;
   }
   if (cfg_.vio.estimate_time_offset && r.lio.initialized && filter_.timeOffsetPriorSet()) {
     r.has_time_offset = true;
@@ -117,7 +119,6 @@ const Image* FramePipeline::frameImage(const Frame& frame, Image& scratch, Frame
 
 void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameResult& r) {
   lio_.update(r.lio, planes, pool_.get());
-  r.lio.lio_ms = std::max(0.0, r.lio.lio_ms - r.link.wait_ms);  // the map server's answer is not LiDAR work
   // Only a registered scan goes into the map: a failed update would insert the scan where the IMU
   // alone put it. Except where the map cannot match the scan (the first scan, new territory, an
   // empty map server, a young map whose voxels hold no planes yet: a sparse LiDAR needs several
@@ -125,18 +126,17 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
   // carrying the pose's uncertainty, and the frame is no LiDAR failure.
   if (r.lio.points.empty()) return;
   if (lio_.mapStarted() && !r.lio.lio_ok) {
-    if (map.holdsAround(r, cfg_.lio.min_matches)) return;
+    if (map.holdsAround(r.lio, cfg_.lio.min_matches)) return;
     r.map_seeded = true;
   }
   Stopwatch map_watch;
-  map.insertScan(lio_.scanForMap(r.lio), r);
+  map.insertScan(lio_.scanForMap(r.lio));
   r.lio.map_ms = map_watch.elapsedMs();
 }
 
 void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r,
                                bool lidar_failed) {
-  Stopwatch watch;
-  const double wait_before = r.link.wait_ms;
+  Stopwatch watch;  // the step's own work: the map's answer (map.visualMap) is not in vio_ms
   // Without a registered scan, the visual points come from the voxels the camera sees (up to the
   // LiDAR's range: visual points are made from LiDAR points), new ones from ray casting into the
   // map's planes.
@@ -149,8 +149,10 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
         frustumVoxelKeys(*camera_, r.lio.state.pose() * cfg_.camera.T_imu_camera, cfg_.visual_map.voxel_size_m,
                          cfg_.visual_map.grid_cell_px, cfg_.visual_map.min_depth_m, no_scan.max_depth_m);
   }
-  VisualMapOps* ops = map.visualMap(frame, r, lidar_failed ? &no_scan.frustum_keys : nullptr);
-  if (ops == nullptr) return;  // no visual update without the map's points
+  const double keys_ms = watch.elapsedMs();
+  const FrameVisualMap visual = map.visualMap(frame, r.lio.state, lidar_failed ? &no_scan.frustum_keys : nullptr);
+  if (visual.visual == nullptr) return;  // no visual update without the map's points
+  watch.restart();
   // The update acts on the filter in place; the covariance before it is the selector's reference.
   const StateCov P_before = filter_.P();
   // The camera's time offset t_d: its prior at the first visual frame after a start, reset to it when
@@ -158,7 +160,7 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   if (cfg_.vio.estimate_time_offset && !filter_.timeOffsetPriorSet()) filter_.setTimeOffsetPrior(cfg_.vio.time_offset_sigma_s);
   CaptureMotion motion;  // the body rate at the image: the last IMU sample of the frame, bias removed
   if (!frame.imu.empty()) motion.omega_imu = frame.imu.back().gyro - filter_.x().bg;
-  const VisualStepResult vs = runVisualStep(*ops, filter_.x(), filter_.P(), gray, *camera_, cfg_.camera.T_imu_camera,
+  const VisualStepResult vs = runVisualStep(visual, filter_.x(), filter_.P(), gray, *camera_, cfg_.camera.T_imu_camera,
                                             cfg_.vio, frame.utime, r.lio, lidar_failed ? &no_scan : nullptr, pool_.get(),
                                             motion);
   if (cfg_.vio.estimate_time_offset && !(std::abs(filter_.x().time_offset_s) <= 3.0 * cfg_.vio.time_offset_sigma_s)) {
@@ -173,7 +175,7 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   r.n_longterm_visual_points = vs.n_longterm_used;
   r.vio_rms_before = vs.update.rms_before;
   r.vio_rms_after = vs.update.rms_after;
-  r.vio_ms = std::max(0.0, watch.elapsedMs() - (r.link.wait_ms - wait_before));
+  r.vio_ms = keys_ms + watch.elapsedMs();
 }
 
 }  // namespace livo

@@ -194,7 +194,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r = LioFrameResult{};
   r.utime = frame.utime;
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
-  watch_.restart();
+  Stopwatch watch;
 
   // 1a. Initialisation: at rest (gravity, gyro bias, g units) or, without a static window, from motion.
   if (!initialized_) {
@@ -208,6 +208,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
       recordState(r);
       motion_.reset();
       map_started_ = false;  // the odometry's map starts with this frame's scan
+      r.lio_ms = watch.elapsedMs();
       return true;
     }
   }
@@ -232,10 +233,12 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r.points = prepareScan(frame.sweep, trace, cfg_.T_imu_lidar, cfg_.lio);
   r.n_points = static_cast<int>(r.points.size());
   recordState(r);  // the prediction until update()
+  r.lio_ms = watch.elapsedMs();
   return true;
 }
 
 void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool) {
+  Stopwatch watch;
   // 3. Iterated point-to-plane update against the map (skipped until the map has content).
   if (map_started_ && !r.points.empty()) {
     NavState x = filter_.x();
@@ -253,7 +256,7 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
       r.lio_ok = true;
     }
   }
-  r.lio_ms = watch_.elapsedMs();
+  r.lio_ms += watch.elapsedMs();
   recordState(r);
 }
 

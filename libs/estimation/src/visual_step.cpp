@@ -11,14 +11,16 @@ std::vector<Vec3> scanInWorld(const NavState& x, const std::vector<BodyPoint>& p
   return out;
 }
 
-VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+VisualStepResult runVisualStep(const FrameVisualMap& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                                const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio,
                                const NoScanRetrieval* no_scan, WorkerPool* pool, const CaptureMotion& motion) {
   VisualStepResult r;
+  DualVisualMap& visual = *map.visual;
   // Retrieval: visual points in the voxels of the current scan (or of the camera frustum when the
   // LiDAR failed), one per grid cell, not occluded, seen from the camera at its capture time.
-  r.points = map.pointsInView(cam, imuPoseAtCapture(x, motion) * T_imu_camera, scanInWorld(x, lio.points),
-                              no_scan ? &no_scan->frustum_keys : nullptr);
+  VisualRetrieval got = visual.retrieve(cam, imuPoseAtCapture(x, motion) * T_imu_camera, scanInWorld(x, lio.points),
+                                        no_scan ? &no_scan->frustum_keys : nullptr);
+  r.points = std::move(got.points);
 
   // Photometric update, sequential after the LiDAR one at the same time stamp.
   if (!r.points.empty()) r.update = visualUpdate(x, P, gray, cam, T_imu_camera, r.points, vio, pool, motion);
@@ -30,19 +32,17 @@ VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, cons
   for (std::size_t i = 0; i < r.points.size(); ++i) {
     if (vu.point_rms.size() == r.points.size() && vu.point_rms[i] >= 0) {
       r.n_longterm_used += r.points[i]->from_longterm;
-      map.reportPhotometricError(*r.points[i], vu.point_rms[i] * vu.point_rms[i], gate);
-      if (map.addObservation(*r.points[i], gray, T_world_camera, vu.point_px[i], float(x.inv_exposure), t))
-        map.refine(*r.points[i]);
+      visual.observe(*r.points[i], vu.point_rms[i] * vu.point_rms[i], gate, gray, T_world_camera, vu.point_px[i],
+                     float(x.inv_exposure), t, map.planes);
     }
   }
-  // Points removed here must not be used through r.points any more.
-  std::vector<bool> occupied = map.occupiedCells();
-  r.removed_bad = map.removeBadPoints();
+  // Points removed here must not be used through r.points any more. New points go to the cells
+  // the retrieval left free.
+  r.removed_bad = visual.removeBadPoints();
   if (r.removed_bad > 0) r.points.clear();
-  if (occupied.size() != static_cast<std::size_t>(map.gridFor(cam).size())) occupied.clear();
   std::vector<NewPointCandidate> candidates;
-  if (no_scan != nullptr && map.planes() != nullptr)
-    candidates = raycastCandidates(*map.planes(), cam, T_world_camera, map.gridFor(cam), occupied, no_scan->ray_step_m,
+  if (no_scan != nullptr && map.planes != nullptr)
+    candidates = raycastCandidates(*map.planes, cam, T_world_camera, got.grid, got.occupied, no_scan->ray_step_m,
                                    no_scan->min_depth_m, no_scan->max_depth_m);
   candidates.reserve(candidates.size() + lio.matched_index.size());
   const WorldPointCovariance point_cov(x, P);
@@ -55,7 +55,7 @@ VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, cons
     c.cov_world = point_cov(bp, q);
     candidates.push_back(c);
   }
-  r.n_new_points = map.addPoints(gray, cam, T_world_camera, float(x.inv_exposure), t, candidates, occupied);
+  r.n_new_points = visual.addPoints(gray, cam, T_world_camera, float(x.inv_exposure), t, candidates, got.occupied);
   return r;
 }
 

@@ -23,7 +23,7 @@ HybridMapStats ByteAccounting::count(const LocalLidarMap& lidar, const DualVisua
   s.bytes_lidar = lidar.voxels().bytes();
   s.bytes_visual_local = visual.local().bytes() + visual.local().scratchBytes();
   s.bytes_visual_longterm = visual.longterm().bytes() + visual.longterm().scratchBytes();
-  s.bytes_index = lidar.tiles().bytes() + work_bytes + visual.mergeScratchBytes();
+  s.bytes_index = lidar.tiles().bytes() + work_bytes;
   s.bytes = s.bytes_lidar + s.bytes_visual_local + s.bytes_visual_longterm + s.bytes_index;
   return s;
 }

@@ -12,33 +12,29 @@ namespace livo {
 
 DualVisualMap::DualVisualMap(const VisualMapConfig& config) : local_(config), longterm_(config, true) {}
 
-std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                                      const std::vector<Vec3>& scan_points_world,
-                                                      std::vector<Vec2>* pixels,
-                                                      const std::vector<VoxelKey>* voxel_keys) {
-  std::vector<Vec2> px_local;
-  std::vector<VisualPoint*> local = local_.pointsInView(cam, T_world_camera, scan_points_world, &px_local, voxel_keys);
-  retrieval_ = local_.lastRetrieval();
-  occupied_ = local_.occupiedCells();
-  retrieved_longterm_ = 0;
-  if (longterm_.size() == 0) {
-    if (pixels) *pixels = std::move(px_local);
-    return local;
-  }
-  std::vector<Vec2> px_lt;
-  std::vector<VisualPoint*> lt = longterm_.pointsInView(cam, T_world_camera, scan_points_world, &px_lt, voxel_keys);
-  const VisualRetrievalStats& rs = longterm_.lastRetrieval();
-  retrieval_.visual_voxels += rs.visual_voxels;
-  retrieval_.searched_points += rs.searched_points;
-  retrieval_.in_image += rs.in_image;
-  retrieval_.occluded += rs.occluded;
-  if (lt.empty()) {
-    if (pixels) *pixels = std::move(px_local);
-    return local;
+VisualRetrieval DualVisualMap::retrieve(const CameraModel& cam, const Pose& T_world_camera,
+                                       const std::vector<Vec3>& scan_points_world,
+                                       const std::vector<VoxelKey>* voxel_keys) {
+  VisualRetrieval local = local_.retrieve(cam, T_world_camera, scan_points_world, voxel_keys);
+  if (longterm_.size() == 0) return local;
+  const VisualRetrieval lt = longterm_.retrieve(cam, T_world_camera, scan_points_world, voxel_keys);
+  VisualRetrieval got;
+  got.grid = local.grid;
+  got.stats = local.stats;
+  got.stats.visual_voxels += lt.stats.visual_voxels;
+  got.stats.searched_points += lt.stats.searched_points;
+  got.stats.in_image += lt.stats.in_image;
+  got.stats.occluded += lt.stats.occluded;
+  if (lt.points.empty()) {
+    got.points = std::move(local.points);
+    got.pixels = std::move(local.pixels);
+    got.occupied = std::move(local.occupied);
+    got.stats.selected = got.points.size();
+    return got;
   }
 
   // Per cell the nearer winner (both lists are per-cell winners of the same grid).
-  const ImageGrid grid = gridFor(cam);
+  const ImageGrid& grid = got.grid;
   const Pose T_camera_world = T_world_camera.inverse();
   struct Best {
     VisualPoint* point = nullptr;
@@ -54,22 +50,20 @@ std::vector<VisualPoint*> DualVisualMap::pointsInView(const CameraModel& cam, co
     Best& b = best[std::size_t(cell)];
     if (winsCell(*p, z, b.point, b.z, local_.config().occlusion_depth_m)) b = {p, px, z, longterm};
   };
-  for (std::size_t i = 0; i < local.size(); ++i) offer(local[i], px_local[i], false);
-  for (std::size_t i = 0; i < lt.size(); ++i) offer(lt[i], px_lt[i], true);
+  for (std::size_t i = 0; i < local.points.size(); ++i) offer(local.points[i], local.pixels[i], false);
+  for (std::size_t i = 0; i < lt.points.size(); ++i) offer(lt.points[i], lt.pixels[i], true);
 
-  std::vector<VisualPoint*> out;
-  if (pixels) pixels->clear();
-  occupied_.assign(std::size_t(grid.size()), false);
+  got.occupied.assign(std::size_t(grid.size()), false);
   for (std::size_t cell = 0; cell < best.size(); ++cell) {
     const Best& b = best[cell];
     if (b.point == nullptr) continue;
-    occupied_[cell] = true;
-    out.push_back(b.point);
-    if (pixels) pixels->push_back(b.px);
-    retrieved_longterm_ += b.longterm;
+    got.occupied[cell] = true;
+    got.points.push_back(b.point);
+    got.pixels.push_back(b.px);
+    got.longterm += b.longterm;
   }
-  retrieval_.selected = out.size();
-  return out;
+  got.stats.selected = got.points.size();
+  return got;
 }
 
 int DualVisualMap::addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
@@ -78,17 +72,15 @@ int DualVisualMap::addPoints(const Image& gray, const CameraModel& cam, const Po
   return local_.addPoints(gray, cam, T_world_camera, inv_exposure, t, candidates, occupied_cells);
 }
 
-bool DualVisualMap::addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
-                                   float inv_exposure, Utime t) {
-  const bool added = holderOf(p).addObservation(p, gray, T_world_camera, px, inv_exposure, t);
-  added_observations_ += added;
-  return added;
-}
-
-void DualVisualMap::refine(VisualPoint& p, const PlaneFinder* lidar) { holderOf(p).refine(p, lidar); }
-
-void DualVisualMap::reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate) {
-  holderOf(p).reportPhotometricError(p, mean_sq_error, gate);
+bool DualVisualMap::observe(VisualPoint& p, double mean_sq_error, double gate, const Image& gray,
+                            const Pose& T_world_camera, const Vec2& px, float inv_exposure, Utime t,
+                            const PlaneFinder* planes) {
+  VisualMap& holder = holderOf(p);
+  holder.reportPhotometricError(p, mean_sq_error, gate);
+  if (!holder.addObservation(p, gray, T_world_camera, px, inv_exposure, t)) return false;
+  ++added_observations_;
+  holder.refine(p, planes);
+  return true;
 }
 
 std::size_t DualVisualMap::removeBadPoints() { return local_.removeBadPoints() + longterm_.removeBadPoints(); }
@@ -147,7 +139,6 @@ bool DualVisualMap::appendObservation(std::int64_t id, const VisualObservation& 
 void DualVisualMap::clear() {
   local_.clear();
   longterm_.clear();
-  occupied_.clear();
 }
 
 }  // namespace livo

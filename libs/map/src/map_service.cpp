@@ -34,7 +34,7 @@ Submap MapService::answer(const MapQuery& q) {
     });
   }
   if (q.want_visual) {
-    // Only points in front of the predicted camera can be selected (VisualMap::pointsInView needs
+    // Only points in front of the predicted camera can be selected (VisualMap::retrieve needs
     // z >= min_depth_m): the others are not sent.
     const std::size_t first = s.visual_points.size();
     map_.visual().copyPointsIn(q.visual_keys, s.visual_points);

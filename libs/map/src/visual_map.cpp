@@ -54,14 +54,13 @@ VisualMap::~VisualMap() = default;
 VisualMap::VisualMap(VisualMap&&) noexcept = default;
 VisualMap& VisualMap::operator=(VisualMap&&) noexcept = default;
 
-ImageGrid VisualMap::gridFor(const CameraModel& cam) const {
-  return ImageGrid(cam.width(), cam.height(), config_.grid_cell_px);
-}
+ImageGrid selectionGrid(const CameraModel& cam, int cell_px) { return ImageGrid(cam.width(), cam.height(), cell_px); }
 
-// Step 1 of pointsInView: the visual voxels touched by the scan (floor keys: no off-by-one for negative
+// Step 1 of retrieve: the visual voxels touched by the scan (floor keys: no off-by-one for negative
 // coordinates), or the given keys. Only voxels that exist in the visual hash are collected, then
 // deduplicated (sort + unique).
-void VisualMap::collectSearchedVoxels(const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys) {
+std::size_t VisualMap::collectSearchedVoxels(const std::vector<Vec3>& scan_points_world,
+                                             const std::vector<VoxelKey>* voxel_keys) {
   searched_.clear();
   if (voxel_keys != nullptr) {
     for (const VoxelKey& k : *voxel_keys) {
@@ -83,10 +82,10 @@ void VisualMap::collectSearchedVoxels(const std::vector<Vec3>& scan_points_world
   }
   std::sort(searched_.begin(), searched_.end());
   searched_.erase(std::unique(searched_.begin(), searched_.end()), searched_.end());
-  retrieval_.visual_voxels = searched_.size();
+  return searched_.size();
 }
 
-// Step 3 of pointsInView: the scan's sparse depth image (smallest depth per pixel) in depth_.
+// Step 3 of retrieve: the scan's sparse depth image (smallest depth per pixel) in depth_.
 void VisualMap::rasterDepth(const CameraModel& cam, const Pose& T_camera_world, const std::vector<Vec3>& scan_points_world) {
   const int w = cam.width(), h = cam.height();
   if (depth_.size() != std::size_t(w) * std::size_t(h)) depth_.assign(std::size_t(w) * std::size_t(h), 0.f);
@@ -116,18 +115,16 @@ bool winsCell(const VisualPoint& p, double z, const VisualPoint* best, double be
   return z < best_z || (z == best_z && p.id < best->id);
 }
 
-std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                                  const std::vector<Vec3>& scan_points_world,
-                                                  std::vector<Vec2>* pixels,
-                                                  const std::vector<VoxelKey>* voxel_keys) {
-  const ImageGrid grid = gridFor(cam);
-  occupied_.assign(std::size_t(grid.size()), false);
-  retrieval_ = VisualRetrievalStats{};
-  if (pixels) pixels->clear();
-  std::vector<VisualPoint*> out;
+VisualRetrieval VisualMap::retrieve(const CameraModel& cam, const Pose& T_world_camera,
+                                   const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys) {
+  VisualRetrieval got;
+  got.grid = selectionGrid(cam, config_.grid_cell_px);
+  const ImageGrid& grid = got.grid;
+  got.occupied.assign(std::size_t(grid.size()), false);
+  VisualRetrievalStats& stats = got.stats;
   const Pose T_camera_world = T_world_camera.inverse();
 
-  collectSearchedVoxels(scan_points_world, voxel_keys);
+  stats.visual_voxels = collectSearchedVoxels(scan_points_world, voxel_keys);
 
   // 2. Per grid cell, the qualifying point with the smallest depth.
   struct Best {
@@ -138,7 +135,7 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
   std::vector<Best> best(std::size_t(grid.size()));
   for (const std::vector<VisualPoint*>* voxel : searched_) {
     for (VisualPoint* p : *voxel) {
-      ++retrieval_.searched_points;
+      ++stats.searched_points;
       if (p->referenceObs() == nullptr) continue;
       const Vec3 p_cam = T_camera_world * p->p_world;
       if (!(p_cam.z() >= config_.min_depth_m)) continue;
@@ -146,7 +143,7 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
       if (!cam.project(p_cam, px) || !cam.inImage(px, config_.border_px)) continue;
       const int cell = grid.cellOf(px);
       if (cell < 0) continue;
-      ++retrieval_.in_image;
+      ++stats.in_image;
       Best& b = best[std::size_t(cell)];
       if (winsCell(*p, p_cam.z(), b.point, b.z, config_.occlusion_depth_m)) b = {p_cam.z(), p, px};
     }
@@ -175,24 +172,25 @@ std::vector<VisualPoint*> VisualMap::pointsInView(const CameraModel& cam, const 
       }
     }
     if (occluded) {
-      ++retrieval_.occluded;
+      ++stats.occluded;
       continue;
     }
-    occupied_[cell] = true;
-    out.push_back(b.point);
-    if (pixels) pixels->push_back(b.px);
+    got.occupied[cell] = true;
+    got.points.push_back(b.point);
+    got.pixels.push_back(b.px);
   }
   for (int idx : depth_touched_) depth_[std::size_t(idx)] = 0.f;
   depth_touched_.clear();
-  retrieval_.selected = out.size();
-  return out;
+  stats.selected = got.points.size();
+  got.longterm = longterm_ ? got.points.size() : 0;
+  return got;
 }
 
 int VisualMap::addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
                          Utime t, const std::vector<NewPointCandidate>& candidates,
                          const std::vector<bool>& occupied_cells) {
   checkGray(gray, cam, "VisualMap::addPoints");
-  const ImageGrid grid = gridFor(cam);
+  const ImageGrid grid = selectionGrid(cam, config_.grid_cell_px);
   if (!occupied_cells.empty() && occupied_cells.size() != std::size_t(grid.size()))
     throw std::invalid_argument("VisualMap::addPoints: occupied_cells has " + std::to_string(occupied_cells.size()) +
                                 " entries, the grid has " + std::to_string(grid.size()));
@@ -288,7 +286,7 @@ std::size_t VisualMap::bytes() const {
 }
 
 std::size_t VisualMap::scratchBytes() const {
-  return depth_.capacity() * sizeof(float) + depth_touched_.capacity() * sizeof(int) + occupied_.capacity() / 8 +
+  return depth_.capacity() * sizeof(float) + depth_touched_.capacity() * sizeof(int) +
          searched_.capacity() * sizeof(void*);
 }
 

@@ -40,8 +40,8 @@ struct FrameResult {
   double time_offset_s = 0.0, time_offset_sigma_s = 0.0;
   bool reset_time_offset = false;
   ImageStatus image = ImageStatus::Ok;  ///< a failed image (image_check.hpp) is never used
-  MapUpdateReport map;         ///< step 7 in process: slides, evictions, bytes (estimate unless recounted), ms
-  MapLinkReport link;          ///< steps 2, 6, 7 through the map server
+  MapUpdateReport map;         ///< step 7 in process (MapFrameReport::update): slides, evictions, bytes, ms
+  MapLinkReport link;          ///< steps 2, 6, 7 through the map server (MapFrameReport::link)
 
   /// The LiDAR update failed although a map to match existed (no returns, or fewer than
   /// lio.min_matches matches): the frame counts as degenerate, its scan stays out of the map, and the

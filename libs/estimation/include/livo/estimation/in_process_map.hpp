@@ -13,14 +13,14 @@ namespace livo {
 class InProcessMap final : public MapAccess {
  public:
   /// `map` is not owned and must outlive this object.
-  explicit InProcessMap(HybridMap& map) : map_(map), visual_(map) {}
+  explicit InProcessMap(HybridMap& map) : map_(map) {}
 
-  const PlaneFinder& planesFor(const Frame&, FrameResult&) override { return map_.lidar().voxels(); }
-  void insertScan(std::vector<PointWithCov> points, FrameResult&) override { map_.lidar().insert(points); }
-  bool holdsAround(const FrameResult& r, int min_points) override {
+  const PlaneFinder& planesFor(const Frame&, const LioFrameResult&) override { return map_.lidar().voxels(); }
+  void insertScan(std::vector<PointWithCov> points) override { map_.lidar().insert(points); }
+  bool holdsAround(const LioFrameResult& lio, int min_points) override {
     const VoxelMap& m = map_.lidar().voxels();
     int on_planes = 0;
-    for (const Vec3& p : scanInWorld(r.lio.state, r.lio.points)) {
+    for (const Vec3& p : scanInWorld(lio.state, lio.points)) {
       if (!keyablePoint(p, m.config().voxel_size_m)) continue;
       bool plane = false;
       m.visitPlanes(m.keyOf(p), [&plane](const Plane&) { plane = true; });
@@ -28,12 +28,13 @@ class InProcessMap final : public MapAccess {
     }
     return false;
   }
-  VisualMapOps* visualMap(const Frame&, FrameResult&, const std::vector<VoxelKey>*) override { return &visual_; }
-  void finishFrame(const Frame&, FrameResult& r) override { r.map = map_.update(r.lio.state.p_world_imu); }
+  FrameVisualMap visualMap(const Frame&, const NavState&, const std::vector<VoxelKey>*) override {
+    return {&map_.visual(), &map_.lidar().voxels()};
+  }
+  MapFrameReport finishFrame(const Frame&, const NavState& x) override { return {map_.update(x.p_world_imu), {}}; }
 
  private:
   HybridMap& map_;
-  HybridVisualOps visual_;
 };
 
 }  // namespace livo

@@ -3,7 +3,6 @@
 #pragma once
 
 #include "livo/common/config.hpp"
-#include "livo/common/timing.hpp"
 #include "livo/estimation/esikf.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/imu_init.hpp"
@@ -45,7 +44,7 @@ struct LioFrameResult {
   int iterations = 0;
   double sigma_min = 0.0;    ///< degeneracy metric of the matched normals
   double rms_residual_m = 0.0;
-  double lio_ms = 0.0;       ///< propagation + undistortion + update
+  double lio_ms = 0.0;       ///< propagation + undistortion (predict) + update, without the map's answer
   double map_ms = 0.0;       ///< map insertion
   std::vector<BodyPoint> points;  ///< the frame's downsampled points (IMU frame at utime)
   std::vector<int> matched_index;    ///< points that matched a plane (indices into points) ...
@@ -67,7 +66,7 @@ class LioOdometry {
   /// yet, frame inside the initialisation window).
   bool predict(const Frame& frame, LioFrameResult& r);
   /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
-  /// r.P, r.lio_ms (since predict()) and the match results. `pool`: threads of the association.
+  /// r.P, r.lio_ms (predict's time plus its own) and the match results. `pool`: threads of the association.
   void update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool = nullptr);
   /// Step 3's insertion: the frame's points in the world with their covariance at the filter's
   /// posterior, for the map. From then on the map holds a scan (update() runs from the next frame on).
@@ -119,7 +118,6 @@ class LioOdometry {
   void mapFrameFromFirstScan();
   bool map_started_ = false;
   bool free_gravity_ = false;  ///< a coarse start where the LiDAR constrains every direction
-  Stopwatch watch_;  ///< predict() to update()
   std::string init_message_;
 };
 

@@ -1,6 +1,9 @@
 // The map as the per-frame pipeline (frame_pipeline.hpp) reaches it: the seam between the frame's
 // steps, written once, and where the map lives.
 //
+// The map's calls take what they need of the frame and return what they did; none writes into the
+// frame's result (the pipeline records step 7's report).
+//
 //   InProcessMap (in_process_map.hpp): the HybridMap in the same process (livo-run, the tests);
 //   RemoteMap (remote_map.hpp): the map server's HybridMap behind a MapClient (livo-estimator).
 //
@@ -20,26 +23,33 @@
 
 namespace livo {
 
+/// What the map did for one frame, handed back at its end (step 7).
+struct MapFrameReport {
+  MapUpdateReport update;  ///< in process: slides, evictions, bytes (estimate unless recounted), ms
+  MapLinkReport link;      ///< through the map server: queries, answers, waits, the update message
+};
+
 class MapAccess {
  public:
   virtual ~MapAccess() = default;
   /// Step 2: the planes the iterated LiDAR update matches against, around the predicted scan
-  /// (r.lio.state is the prediction, r.lio.points the frame's points). Records its cost in r.link.
-  virtual const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) = 0;
+  /// (`lio.state` is the prediction, `lio.points` the frame's points).
+  virtual const PlaneFinder& planesFor(const Frame& frame, const LioFrameResult& lio) = 0;
   /// Step 3b: the frame's points in the world frame at the LiDAR posterior, with covariance.
-  virtual void insertScan(std::vector<PointWithCov> points, FrameResult& r) = 0;
+  virtual void insertScan(std::vector<PointWithCov> points) = 0;
   /// Whether the map should have matched the scan: planes for at least `min_points` of the predicted
   /// scan's points (after a failed LiDAR update: otherwise the scan is new territory, the map is
   /// empty or still young, and it seeds the map instead of being dropped). The map server's answer
   /// knows only its submap's plane count (any plane counts). True when unknown (no answer).
-  virtual bool holdsAround(const FrameResult& r, int min_points) = 0;
+  virtual bool holdsAround(const LioFrameResult& lio, int min_points) = 0;
   /// Step 6: the visual map for the frame's image, around the registered scan at the LiDAR posterior
-  /// (r.lio.state), or in the visual voxels `frustum_keys` when the LiDAR update failed (no
-  /// registered scan); null when it cannot be had (no answer from the map server): no visual update.
+  /// `x`, or in the visual voxels `frustum_keys` when the LiDAR update failed (no registered scan);
+  /// its `visual` is null when it cannot be had (no answer from the map server): no visual update.
   /// Valid until finishFrame.
-  virtual VisualMapOps* visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) = 0;
-  /// Step 7: the frame is done (r.lio.state is final): map maintenance or the map server's update.
-  virtual void finishFrame(const Frame& frame, FrameResult& r) = 0;
+  virtual FrameVisualMap visualMap(const Frame& frame, const NavState& x, const std::vector<VoxelKey>* frustum_keys) = 0;
+  /// Step 7: the frame is done at its final state `x`: map maintenance or the map server's update.
+  /// Returns what the map did and what reaching it cost since the frame's step 2.
+  virtual MapFrameReport finishFrame(const Frame& frame, const NavState& x) = 0;
 };
 
 }  // namespace livo

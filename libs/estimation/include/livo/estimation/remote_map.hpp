@@ -24,7 +24,7 @@
 #include "livo/estimation/pipeline_config.hpp"
 #include "livo/map/map_protocol.hpp"
 #include "livo/map/plane_finder.hpp"
-#include "livo/map/visual_map.hpp"
+#include "livo/map/dual_visual_map.hpp"
 
 #include <cstdint>
 #include <unordered_map>
@@ -48,11 +48,11 @@ class RemoteMap final : public MapAccess {
   /// Uses the voxel sizes and camera extrinsics of `cfg`; `client` must outlive this object.
   RemoteMap(const PipelineConfig& cfg, MapClient& client);
 
-  const PlaneFinder& planesFor(const Frame& frame, FrameResult& r) override;
-  void insertScan(std::vector<PointWithCov> points, FrameResult& r) override;
-  bool holdsAround(const FrameResult& r, int) override { return !r.link.map_timeout ? r.link.submap_planes > 0 : true; }
-  VisualMapOps* visualMap(const Frame& frame, FrameResult& r, const std::vector<VoxelKey>* frustum_keys) override;
-  void finishFrame(const Frame& frame, FrameResult& r) override;
+  const PlaneFinder& planesFor(const Frame& frame, const LioFrameResult& lio) override;
+  void insertScan(std::vector<PointWithCov> points) override;
+  bool holdsAround(const LioFrameResult&, int) override { return !link_.map_timeout ? link_.submap_planes > 0 : true; }
+  FrameVisualMap visualMap(const Frame& frame, const NavState& x, const std::vector<VoxelKey>* frustum_keys) override;
+  MapFrameReport finishFrame(const Frame& frame, const NavState& x) override;
 
   std::size_t timeouts() const { return timeouts_; }
   /// Submaps whose voxel size differs from this estimator's voxel_map.voxel_size_m (a configuration
@@ -72,8 +72,9 @@ class RemoteMap final : public MapAccess {
     explicit PointSignature(const VisualPoint& p);
     bool same(const VisualPoint& p) const;
   };
-  MapQuery queryAt(const Frame& frame, const FrameResult& r) const;
-  bool ask(MapQuery& q, Submap& out, FrameResult& r);
+  MapQuery queryAt(const Frame& frame, const NavState& x) const;
+  /// Sends `q` and waits for its answer, counted in link_.
+  bool ask(MapQuery& q, Submap& out);
   /// The created and changed points of the visual step in full, removed ones without observations.
   void collectVisualChanges(std::vector<VisualPoint>& out) const;
 
@@ -81,12 +82,14 @@ class RemoteMap final : public MapAccess {
   Pose T_imu_camera_;
   MapClient& client_;
   PlaneIndex planes_;  ///< the last answered LiDAR submap
-  VisualMap cache_;    ///< per visual frame: the visual points the server sent
-  SingleVisualOps visual_;
+  /// Per visual frame: the visual points the server sent, all in its local map (so local and
+  /// long-term points compete in one selection grid).
+  DualVisualMap cache_;
   std::unordered_map<std::int64_t, PointSignature> before_;  ///< the cached points as they came
   std::int64_t first_new_id_ = 0;
   bool visual_ran_ = false;  ///< this frame's visual step ran on cache_
   bool estimating_ = false;  ///< this frame reached step 2 (an update is due at its end)
+  MapLinkReport link_;       ///< this frame's, from step 2 to its end
   std::vector<PointWithCov> registered_;
   std::int64_t request_id_ = 0;
   std::size_t timeouts_ = 0, voxel_size_mismatches_ = 0;

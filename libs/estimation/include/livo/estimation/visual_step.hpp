@@ -6,7 +6,7 @@
 
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/estimation/vio_update.hpp"
-#include "livo/map/hybrid_map.hpp"
+#include "livo/map/dual_visual_map.hpp"
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/visual_map.hpp"
 #include "livo/sensors/camera_config.hpp"
@@ -16,74 +16,13 @@
 
 namespace livo {
 
-/// The visual map operations the visual step needs (VisualMap / HybridMap semantics).
-class VisualMapOps {
- public:
-  virtual ~VisualMapOps() = default;
-  /// `voxel_keys` null: the visual voxels of `scan_points_world`; else those keys (see VisualMap).
-  virtual std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                                 const std::vector<Vec3>& scan_points_world,
-                                                 const std::vector<VoxelKey>* voxel_keys) = 0;
-  virtual const std::vector<bool>& occupiedCells() const = 0;
-  virtual ImageGrid gridFor(const CameraModel& cam) const = 0;
-  virtual void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate) = 0;
-  virtual bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
-                              float inv_exposure, Utime t) = 0;
-  virtual void refine(VisualPoint& p) = 0;
-  /// The LiDAR planes the map has around the frame (normal refinement, new points by ray casting);
-  /// may be null.
-  virtual const PlaneFinder* planes() const = 0;
-  virtual std::size_t removeBadPoints() = 0;
-  virtual int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure,
-                        Utime t, const std::vector<NewPointCandidate>& candidates,
-                        const std::vector<bool>& occupied_cells) = 0;
-};
-
-/// Forwards every VisualMapOps call except refine() to a map with VisualMap's per-frame operations.
-template <class Map>
-class VisualOpsOn : public VisualMapOps {
- public:
-  explicit VisualOpsOn(Map& map) : map_(map) {}
-  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T, const std::vector<Vec3>& scan,
-                                         const std::vector<VoxelKey>* keys) override {
-    return map_.pointsInView(cam, T, scan, nullptr, keys);
-  }
-  const std::vector<bool>& occupiedCells() const override { return map_.occupiedCells(); }
-  ImageGrid gridFor(const CameraModel& cam) const override { return map_.gridFor(cam); }
-  void reportPhotometricError(VisualPoint& p, double e, double gate) override { map_.reportPhotometricError(p, e, gate); }
-  bool addObservation(VisualPoint& p, const Image& g, const Pose& T, const Vec2& px, float tau, Utime t) override {
-    return map_.addObservation(p, g, T, px, tau, t);
-  }
-  std::size_t removeBadPoints() override { return map_.removeBadPoints(); }
-  int addPoints(const Image& g, const CameraModel& cam, const Pose& T, float tau, Utime t,
-                const std::vector<NewPointCandidate>& c, const std::vector<bool>& occ) override {
-    return map_.addPoints(g, cam, T, tau, t, c, occ);
-  }
-
- protected:
-  Map& map_;
-};
-
-/// On a HybridMap: both visual maps, refinement against its LiDAR map.
-class HybridVisualOps final : public VisualOpsOn<DualVisualMap> {
- public:
-  explicit HybridVisualOps(HybridMap& map) : VisualOpsOn(map.visual()), planes_(&map.lidar().voxels()) {}
-  void refine(VisualPoint& p) override { map_.refine(p, planes_); }
-  const PlaneFinder* planes() const override { return planes_; }
-
- private:
-  const PlaneFinder* planes_;
-};
-
-/// On one VisualMap, refining normals against `planes` (may be null).
-class SingleVisualOps final : public VisualOpsOn<VisualMap> {
- public:
-  SingleVisualOps(VisualMap& map, const PlaneFinder* planes) : VisualOpsOn(map), planes_(planes) {}
-  void refine(VisualPoint& p) override { map_.refine(p, planes_); }
-  const PlaneFinder* planes() const override { return planes_; }
-
- private:
-  const PlaneFinder* planes_;
+/// The visual map one frame's visual step works on: the points it retrieves, observes, removes and
+/// adds (DualVisualMap: the hybrid map's two visual maps in process, or livo-estimator's per-frame copy
+/// of the map server's points), and the LiDAR planes around the frame that refine the points' normals
+/// and take the rays of a frame without a registered scan (may be null).
+struct FrameVisualMap {
+  DualVisualMap* visual = nullptr;
+  const PlaneFinder* planes = nullptr;
 };
 
 /// New-point candidates without a registered scan (docs/algorithms.md 5.4, ray casting): for each free
@@ -121,7 +60,7 @@ struct NoScanRetrieval {
   double min_depth_m = 0.1;
   double max_depth_m = 30.0;
 };
-VisualStepResult runVisualStep(VisualMapOps& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
+VisualStepResult runVisualStep(const FrameVisualMap& map, NavState& x, StateCov& P, const Image& gray, const CameraModel& cam,
                                const Pose& T_imu_camera, const VioConfig& vio, Utime t, const LioFrameResult& lio,
                                const NoScanRetrieval* no_scan = nullptr, WorkerPool* pool = nullptr,
                                const CaptureMotion& motion = {});

@@ -25,7 +25,7 @@ struct HybridMapStats {
   std::size_t bytes_lidar = 0;            ///< VoxelMap::bytes()
   std::size_t bytes_visual_local = 0;     ///< VisualMap::bytes() + scratchBytes()
   std::size_t bytes_visual_longterm = 0;  ///< VisualMap::bytes() + scratchBytes()
-  std::size_t bytes_index = 0;            ///< tile index, slide and eviction work lists, merged cell flags
+  std::size_t bytes_index = 0;            ///< tile index, slide and eviction work lists
   std::size_t bytes = 0;                  ///< sum of the above
   std::size_t cap_bytes = 0;              ///< 0 = no cap
   HybridMapCounters counters;

@@ -6,7 +6,7 @@
 // livo/map/map_protocol.hpp (copies per visual voxel, upserts, appended observations, next id).
 // Which points live in which map is the slide policy's business (slide_policy.hpp).
 //
-// Pointers: VisualPoint* from pointsInView / find stay valid until THAT point leaves its map:
+// Pointers: VisualPoint* from retrieve / find stay valid until THAT point leaves its map:
 // removeBadPoints() (the removed points), upsert() (the point with that id is replaced), clear(),
 // and through HybridMap: update() (slides move points between the maps, the memory cap evicts them)
 // and loading a map file. Callers must not change a visual point's p_world or id.
@@ -29,34 +29,27 @@ class DualVisualMap {
  public:
   explicit DualVisualMap(const VisualMapConfig& config);
 
-  // --- Per-frame operations of VisualMap, over both maps --------------------------------------------
-  ImageGrid gridFor(const CameraModel& cam) const { return local_.gridFor(cam); }
-  /// VisualMap::pointsInView on the local and on the long-term map; per grid cell one winner by
-  /// winsCell (visual_map.hpp: the nearer, except that a point kept by the long-term map wins within
-  /// vio.occlusion_depth_m of a local one), ordered by cell. A cell whose local winner is occluded
-  /// may still receive the long-term winner (each map applies the occlusion test to its own winner).
-  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                         const std::vector<Vec3>& scan_points_world,
-                                         std::vector<Vec2>* pixels = nullptr,
-                                         const std::vector<VoxelKey>* voxel_keys = nullptr);
-  /// Cells holding a point returned by the last pointsInView (for addPoints).
-  const std::vector<bool>& occupiedCells() const { return occupied_; }
-  /// Summed counters of the last pointsInView (selected = points returned).
-  const VisualRetrievalStats& lastRetrieval() const { return retrieval_; }
-  /// Of those, how many came from the long-term map.
-  std::size_t lastRetrievalLongterm() const { return retrieved_longterm_; }
+  // --- One frame's visual step (visual_step.hpp): retrieve, observe, remove, add -------------------
+  /// VisualMap::retrieve on the local and on the long-term map; per grid cell one winner by winsCell
+  /// (visual_map.hpp: the nearer, except that a point kept by the long-term map wins within
+  /// vio.occlusion_depth_m of a local one), ordered by cell; the counters summed. A cell whose local
+  /// winner is occluded may still receive the long-term winner (each map applies the occlusion test to
+  /// its own winner).
+  VisualRetrieval retrieve(const CameraModel& cam, const Pose& T_world_camera,
+                           const std::vector<Vec3>& scan_points_world,
+                           const std::vector<VoxelKey>* voxel_keys = nullptr);
+  /// A point the photometric update used (`p` must come from this map), on the map that holds it:
+  /// its error against `gate` (VisualMap::reportPhotometricError), then the observation at `px` of
+  /// `gray` (VisualMap::addObservation) and, when one was added, reference selection and normal
+  /// refinement against `planes` (VisualMap::refine; null: no normal refinement). True when an
+  /// observation was added.
+  bool observe(VisualPoint& p, double mean_sq_error, double gate, const Image& gray, const Pose& T_world_camera,
+               const Vec2& px, float inv_exposure, Utime t, const PlaneFinder* planes);
+  /// VisualMap::removeBadPoints on both maps; returns the count.
+  std::size_t removeBadPoints();
   /// New visual points go to the local map (VisualMap::addPoints).
   int addPoints(const Image& gray, const CameraModel& cam, const Pose& T_world_camera, float inv_exposure, Utime t,
                 const std::vector<NewPointCandidate>& candidates, const std::vector<bool>& occupied_cells);
-  /// VisualMap::addObservation / refine / reportPhotometricError on the map that holds `p` (either;
-  /// `p` must come from this map). refine looks the normal up in `lidar` (the local LiDAR map; may
-  /// be null: no normal refinement).
-  bool addObservation(VisualPoint& p, const Image& gray, const Pose& T_world_camera, const Vec2& px,
-                      float inv_exposure, Utime t);
-  void refine(VisualPoint& p, const PlaneFinder* lidar);
-  void reportPhotometricError(VisualPoint& p, double mean_sq_error, double gate);
-  /// VisualMap::removeBadPoints on both maps; returns the count.
-  std::size_t removeBadPoints();
   /// True when `p` is held by the long-term map.
   bool isLongterm(const VisualPoint& p) const { return longterm_.find(p.id) == &p; }
 
@@ -82,12 +75,10 @@ class DualVisualMap {
   VisualMap& local() { return local_; }
   VisualMap& longterm() { return longterm_; }
 
-  /// Observations added through addObservation, upsert and appendObservation since construction
-  /// (never reset; the byte estimate's growth term).
+  /// Observations added through observe, upsert and appendObservation since construction (never
+  /// reset; the byte estimate's growth term).
   std::size_t addedObservations() const { return added_observations_; }
-  /// The merged retrieval's cell flags, bytes (the two maps' own scratch: VisualMap::scratchBytes).
-  std::size_t mergeScratchBytes() const { return occupied_.capacity() / 8; }
-  /// Empties both maps (and the cell flags).
+  /// Empties both maps.
   void clear();
 
  private:
@@ -96,11 +87,6 @@ class DualVisualMap {
   VisualMap local_;
   VisualMap longterm_;
   std::size_t added_observations_ = 0;
-
-  // Merged retrieval state.
-  std::vector<bool> occupied_;
-  VisualRetrievalStats retrieval_;
-  std::size_t retrieved_longterm_ = 0;
 };
 
 }  // namespace livo

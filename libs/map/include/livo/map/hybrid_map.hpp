@@ -14,7 +14,7 @@
 // global mode (FAST-LIVO2 behaviour): one unbounded LiDAR map and one visual map; update() does nothing.
 //
 // Pointers: Plane* (lidar().voxels().findBestPlane) stay valid until the next LiDAR insertion,
-// update(), clear() or map file load; VisualPoint* (visual().pointsInView / find) until that point
+// update(), clear() or map file load; VisualPoint* (visual().retrieve / find) until that point
 // leaves its map: visual().removeBadPoints() or upsert(), update(), clear() or a map file load
 // (details in the parts' headers).
 // Thread safety: const member functions may run concurrently; everything else needs exclusive access.

@@ -50,7 +50,7 @@ struct Submap {
   double voxel_size_m = 0.5;     ///< root voxel edge, m (> 0)
   std::vector<SubmapPlane> planes;
   /// Candidate visual points: every point of the local and long-term visual maps in the visual voxels
-  /// the query named (the estimator selects among them as VisualMap::pointsInView does).
+  /// the query named (the estimator selects among them as VisualMap::retrieve does).
   std::vector<VisualPoint> visual_points;
   /// Visual point ids below this are taken in the map server's maps: new points use ids from here on.
   std::int64_t next_visual_point_id = 1;

@@ -9,7 +9,7 @@
 // instead of whole images, and the map can be pruned (extract / idsOutsideBox / removeBadPoints).
 //
 // Ownership and pointers: every point lives in its own heap block (std::unique_ptr), so a
-// VisualPoint* handed out (pointsInView, find, forEach) stays valid until THAT point leaves the map
+// VisualPoint* handed out (retrieve, find, forEach) stays valid until THAT point leaves the map
 // (removeBadPoints, extract, clear, destruction); adding or removing other points never moves it.
 // Callers may change a point's observations, normal, reference and counters through the pointer, but
 // must not change p_world or id while it is in the map (extract, change, insert instead): the voxel
@@ -55,7 +55,7 @@ struct NewPointCandidate {
   Mat3 cov_world = Mat3::Zero();      ///< position covariance, m^2
 };
 
-/// Counters of the last pointsInView call.
+/// Counters of one retrieval.
 struct VisualRetrievalStats {
   std::size_t visual_voxels = 0;    ///< distinct visual voxels holding a scan point
   std::size_t searched_points = 0;  ///< points in those voxels
@@ -64,7 +64,20 @@ struct VisualRetrievalStats {
   std::size_t selected = 0;         ///< points returned
 };
 
-/// The per-cell choice of pointsInView (both maps, and their merge in DualVisualMap): does candidate `p`
+/// What one retrieval found (VisualMap::retrieve, DualVisualMap::retrieve).
+struct VisualRetrieval {
+  ImageGrid grid;                    ///< the camera's selection grid
+  std::vector<VisualPoint*> points;  ///< at most one per grid cell, ordered by cell
+  std::vector<Vec2> pixels;          ///< their projections
+  std::vector<bool> occupied;        ///< per grid cell (grid.size()): holds a returned point (for addPoints)
+  VisualRetrievalStats stats;
+  std::size_t longterm = 0;  ///< of `points`, those held by a long-term visual map
+};
+
+/// The selection grid of `cam` for cells of `cell_px` (VisualMapConfig::grid_cell_px).
+ImageGrid selectionGrid(const CameraModel& cam, int cell_px);
+
+/// The per-cell choice of retrieve (both maps, and their merge in DualVisualMap): does candidate `p`
 /// at depth `z` beat the cell's current winner `best` (null: none) at depth `best_z`? The nearer point
 /// wins (ties: smaller id), except that a point the long-term map kept (VisualPoint::from_longterm)
 /// wins against one that it did not unless it lies farther by more than `same_surface_m` (the occlusion
@@ -72,6 +85,13 @@ struct VisualRetrievalStats {
 /// rather than a new point on the same surface that carries the drift since then.
 bool winsCell(const VisualPoint& p, double z, const VisualPoint* best, double best_z, double same_surface_m);
 
+/// 21 public member functions (overloads counted once), one over the guideline of 20, for a reason:
+/// the per-frame rules (retrieve, addPoints, addObservation, refine, reportPhotometricError,
+/// removeBadPoints) work on the voxel index that the storage functions (insert, extract, find,
+/// forEach, forEachInVoxel, idsOutsideBox, clear) keep consistent with the points' positions; a
+/// separate storage class would expose that index to a second owner or forward every call to it.
+/// The frame's visual step does not see this class: it works on DualVisualMap's four per-frame
+/// calls (dual_visual_map.hpp).
 class VisualMap {
  public:
   /// `longterm`: the long-term visual map: every point it takes (insert) is marked
@@ -83,27 +103,18 @@ class VisualMap {
   VisualMap(const VisualMap&) = delete;
   VisualMap& operator=(const VisualMap&) = delete;
 
-  /// The selection grid for a camera (config grid_cell_px).
-  ImageGrid gridFor(const CameraModel& cam) const;
-
   /// Visual points to use for one image (docs/algorithms.md 4.2). Only the visual voxels that hold a scan
   /// point (world frame, floor keys) are searched. A point qualifies when it has a reference
   /// observation, lies at depth z >= min_depth_m in the camera frame, projects and lies inside the
   /// border_px border; per grid cell the qualifying point with the smallest depth z wins (ties: smaller
-  /// id; a point the long-term map kept goes first on the same surface: winsCell). A winner is occluded (dropped, its cell stays free) when a scan point projected within
-  /// +-occlusion_window_px of its pixel (rounded) is closer in depth by more than occlusion_depth_m.
-  /// Results are ordered by cell index; `pixels` (optional) receives the projections. With
-  /// `voxel_keys` the visual voxels searched are those keys instead of the scan's (a frame whose
-  /// LiDAR failed: the camera frustum, frustum_keys.hpp); the scan still serves the occlusion test
-  /// (an empty scan: none). The occupied
-  /// cells (cells with a returned point) are kept for addPoints: see occupiedCells().
-  std::vector<VisualPoint*> pointsInView(const CameraModel& cam, const Pose& T_world_camera,
-                                         const std::vector<Vec3>& scan_points_world,
-                                         std::vector<Vec2>* pixels = nullptr,
-                                         const std::vector<VoxelKey>* voxel_keys = nullptr);
-  /// Occupied cells of the last pointsInView call (size gridFor(cam).size()).
-  const std::vector<bool>& occupiedCells() const { return occupied_; }
-  const VisualRetrievalStats& lastRetrieval() const { return retrieval_; }
+  /// id; a point the long-term map kept goes first on the same surface: winsCell). A winner is occluded
+  /// (dropped, its cell stays free) when a scan point projected within +-occlusion_window_px of its
+  /// pixel (rounded) is closer in depth by more than occlusion_depth_m. With `voxel_keys` the visual
+  /// voxels searched are those keys instead of the scan's (a frame whose LiDAR failed: the camera
+  /// frustum, frustum_keys.hpp); the scan still serves the occlusion test (an empty scan: none).
+  VisualRetrieval retrieve(const CameraModel& cam, const Pose& T_world_camera,
+                           const std::vector<Vec3>& scan_points_world,
+                           const std::vector<VoxelKey>* voxel_keys = nullptr);
 
   /// Creates visual points (docs/algorithms.md 5.1): a candidate qualifies when it lies at depth
   /// z >= min_depth_m (in front of the camera: fix of #421), projects inside the border and its cell
@@ -154,7 +165,7 @@ class VisualMap {
   /// scratchBytes), so this grows and shrinks with the points only.
   std::size_t bytes() const;
   /// Retrieval scratch memory: the sparse depth image (4 bytes per pixel, allocated by the first
-  /// pointsInView), the cell flags and the voxel list.
+  /// retrieve) and the voxel list.
   std::size_t scratchBytes() const;
   std::size_t numVoxels() const { return voxels_.size(); }
   void forEach(const std::function<void(const VisualPoint&)>& f) const;
@@ -181,7 +192,8 @@ class VisualMap {
   const VisualMapConfig& config() const { return config_; }
 
  private:
-  void collectSearchedVoxels(const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys);
+  /// The searched voxels into searched_; returns their count.
+  std::size_t collectSearchedVoxels(const std::vector<Vec3>& scan_points_world, const std::vector<VoxelKey>* voxel_keys);
   void rasterDepth(const CameraModel& cam, const Pose& T_camera_world, const std::vector<Vec3>& scan_points_world);
   /// Scores every observation of p (see refine) and returns the index of the best (-1: none).
   int scoreObservations(VisualPoint& p) const;
@@ -195,9 +207,7 @@ class VisualMap {
   std::int64_t next_id_ = 1;
   std::vector<std::int64_t> suspects_;  ///< ids whose bad-update count went over the limit
 
-  // Per-call state of pointsInView (kept to avoid reallocations).
-  std::vector<bool> occupied_;
-  VisualRetrievalStats retrieval_;
+  // Scratch of retrieve (kept to avoid reallocations).
   std::vector<float> depth_;        ///< sparse depth image, 0 = no scan point
   std::vector<int> depth_touched_;  ///< pixels set in depth_ (reset after each call)
   std::vector<const std::vector<VisualPoint*>*> searched_;  ///< visual voxels to search
