@@ -64,7 +64,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
   file.checkAllKeysUsed();
   const bool camera = visual_mode != "off";
   if (!camera) cfg.preprocess.camera_enabled = false;  // LiDAR-inertial: one frame per scan
-  cfg.visual_mode = visual_mode;
+  cfg.visual_mode = parseVisualMode(visual_mode);
   cfg.threads = threads;
   if (tweak) tweak(cfg);
   Pipeline pipeline(cfg);

@@ -35,7 +35,7 @@ inline SimFrames simulateFrames(const std::string& name, double duration_s, cons
   livo::ConfigFile file = livo::ConfigFile::parse(rig.str(), "sim rig");
   SimFrames out;
   out.cfg.load(file.root());
-  out.cfg.visual_mode = visual_mode;
+  out.cfg.visual_mode = livo::parseVisualMode(visual_mode);
   if (visual_mode == "off") out.cfg.preprocess.camera_enabled = false;
   livo::Recombiner rec(out.cfg.preprocess);
   livo::Pipeline pipeline(out.cfg);

@@ -1,6 +1,7 @@
 // libs/common: SO(3)/SE(3) against numeric differences and identities, config loading errors,
 // timing summaries.
 #include "livo/common/config.hpp"
+#include "livo/common/modes.hpp"
 #include "livo/common/so3.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/common/types.hpp"
@@ -258,4 +259,47 @@ TEST(Types, TimeConversionsAndScanEnd) {
   s.points.resize(2);
   s.points[1].time_offset_s = 0.1f;
   EXPECT_EQ(s.endUtime(), 1100000);
+}
+
+// Every mode's name parses back to it; an unknown name is refused with the valid names, by the
+// parser (std::invalid_argument) and where a config reads it (ConfigError naming the key).
+template <class Mode>
+void expectRoundTrips(std::initializer_list<Mode> all, const std::string& names) {
+  for (Mode m : all) EXPECT_EQ(parseMode<Mode>(toString(m)), m) << toString(m);
+  EXPECT_EQ(modeNames<Mode>(), names);
+  Mode kept = *all.begin();
+  EXPECT_FALSE(parseMode(std::string("nonsense"), kept));
+  EXPECT_EQ(kept, *all.begin());
+  EXPECT_THROW(parseMode<Mode>("Nonsense"), std::invalid_argument);
+}
+
+TEST(Modes, NamesRoundTripAndUnknownNamesAreRefused) {
+  expectRoundTrips({LidarModel::Avia, LidarModel::Mid360, LidarModel::Spinning32, LidarModel::Generic},
+                   "avia, mid360, spinning32 or generic");
+  expectRoundTrips({CameraKind::Pinhole, CameraKind::Equidistant}, "pinhole or equidistant");
+  expectRoundTrips({Environment::Indoor, Environment::Outdoor}, "indoor or outdoor");
+  expectRoundTrips({VisualMode::Adaptive, VisualMode::All, VisualMode::Off}, "adaptive, all or off");
+  expectRoundTrips({MapMode::Hybrid, MapMode::Global}, "hybrid or global");
+  try {
+    parseMode<VisualMode>("every");
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "visual mode must be adaptive, all or off, got 'every'");
+  }
+
+  auto file = ConfigFile::parse("environment: outdoor\nlidar:\n  model: velodyne\n", "rig.yaml");
+  Environment env = Environment::Indoor;
+  readMode(file.root(), "environment", env);
+  EXPECT_EQ(env, Environment::Outdoor);
+  LidarModel lidar = LidarModel::Generic;
+  try {
+    requireMode(file.root().section("lidar"), "model", lidar);
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "rig.yaml: lidar.model: must be avia, mid360, spinning32 or generic, got 'velodyne'");
+  }
+  EXPECT_THROW(requireMode(ConfigFile::parse("{}", "rig.yaml").root(), "model", lidar), ConfigError);
+  CameraKind absent = CameraKind::Equidistant;  // a missing optional key keeps the default
+  readMode(ConfigFile::parse("{}", "rig.yaml").root(), "model", absent);
+  EXPECT_EQ(absent, CameraKind::Equidistant);
 }

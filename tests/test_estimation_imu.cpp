@@ -275,7 +275,7 @@ std::string imuConfigError(const std::string& yaml) {
   auto f = livo::ConfigFile::parse(yaml, "rig.yaml");
   livo::ImuConfig c;
   try {
-    c.load(f.root().section("imu"));
+    c.load(f.root().section("imu"), 200.0);
   } catch (const livo::ConfigError& e) {
     return e.what();
   }

@@ -450,7 +450,7 @@ TEST(HybridMap, GlobalModeNeverSlidesNorEvicts) {
 TEST(HybridMap, RetrievalSearchesBothVisualMaps) {
   CameraConfig cc;
   cc.enabled = true;
-  cc.model = "pinhole";
+  cc.model = CameraKind::Pinhole;
   cc.width = 640;
   cc.height = 480;
   cc.fx = cc.fy = 400.0;

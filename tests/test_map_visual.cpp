@@ -30,7 +30,7 @@ constexpr int kW = 640, kH = 480;
 CameraConfig pinholeConfig() {
   CameraConfig c;
   c.enabled = true;
-  c.model = "pinhole";
+  c.model = CameraKind::Pinhole;
   c.width = kW;
   c.height = kH;
   c.fx = c.fy = 400.0;
@@ -257,7 +257,7 @@ TEST(VisualCreation, RejectsCandidatesBehindOrTooCloseAndOutsideBorder) {
   // A wide fisheye model projects points behind the image plane inside the image (theta > 90 deg):
   // neither creation nor retrieval may take them.
   CameraConfig fc = pinholeConfig();
-  fc.model = "equidistant";
+  fc.model = CameraKind::Equidistant;
   fc.fx = fc.fy = 60.0;
   const auto fisheye = CameraModel::create(fc);
   const Vec3 behind_cam(0.5, 0.2, -3.0);

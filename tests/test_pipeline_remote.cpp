@@ -70,7 +70,7 @@ RemoteRun runRemote(const SimFrames& sf, DirectClient& client) {
 
 MapService makeService(const PipelineConfig& cfg) {
   HybridMapConfig m = cfg.map;
-  m.mode = parseMapMode(cfg.map_mode);
+  m.mode = cfg.map_mode;
   return MapService(m, cfg.lio.map, cfg.visual_map);
 }
 

@@ -36,7 +36,7 @@ const Recorded& room() {
     ConfigFile file = ConfigFile::parse(rig.str(), "sim rig");
     out.cfg.load(file.root());
     out.cfg.preprocess.camera_enabled = false;
-    out.cfg.visual_mode = "off";
+    out.cfg.visual_mode = VisualMode::Off;
     Recombiner rec(out.cfg.preprocess);
     Frame f;
     const auto drain = [&] {

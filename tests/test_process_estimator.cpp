@@ -25,7 +25,7 @@ const livo_test::SimFrames& roomFrames() {
 
 MapService makeService(const PipelineConfig& cfg) {
   HybridMapConfig m = cfg.map;
-  m.mode = parseMapMode(cfg.map_mode);
+  m.mode = cfg.map_mode;
   return MapService(m, cfg.lio.map, cfg.visual_map);
 }
 

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "estimator", "lio", "vio", "selector"});
     node_cfg.config_lines = file.effectiveLines();
-    pipe_cfg.visual_mode = visual_mode;  // command-line settings: PipelineConfig has no keys for them
+    pipe_cfg.visual_mode = parseVisualMode(visual_mode);  // command-line settings: PipelineConfig has no keys for them
     pipe_cfg.threads = threads;
     if (args.print_config) {
       printConfig(std::cout, cl.program(), file, "--visual-mode " + visual_mode);

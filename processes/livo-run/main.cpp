@@ -50,8 +50,8 @@ ConfigFile loadConfig(const livo_run::Args& args, livo_run::Config& cfg) {
   cfg.exporter.load(root.section("exporter"));
   EstimatorNodeConfig{}.load(root.section("estimator"));  // livo-estimator's section: checked, not used here
   file.checkAllKeysUsed();
-  cfg.pipe.visual_mode = args.visual_mode;  // command-line settings: PipelineConfig has no keys for them
-  cfg.pipe.map_mode = args.map_mode;
+  cfg.pipe.visual_mode = parseVisualMode(args.visual_mode);  // command-line settings: PipelineConfig has no keys for them
+  cfg.pipe.map_mode = parseMapMode(args.map_mode);
   cfg.pipe.threads = args.threads;
   return file;
 }

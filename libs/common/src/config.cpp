@@ -18,7 +18,11 @@ struct ConfigFile::State {
   std::set<std::string> sections;  // dotted keys opened as sections
   // The effective configuration: per dotted key read, the file's node or the default, in reading order.
   std::vector<std::string> effective_order;
-  std::map<std::string, YAML::Node> effective;
+  struct Effective {
+    YAML::Node node;
+    int reads = 0;  // how often a get / require read the key (0: only overridden)
+  };
+  std::map<std::string, Effective> effective;
 };
 
 namespace {
@@ -142,7 +146,7 @@ std::string ConfigFile::effectiveYaml() const {
       if (dot == std::string::npos) break;
       start = dot + 1;
     }
-    t->leaf = state_->effective.at(key);
+    t->leaf = state_->effective.at(key).node;
     t->is_leaf = true;
   }
   if (root.children.empty()) return "{}\n";
@@ -154,11 +158,11 @@ std::string ConfigFile::effectiveYaml() const {
 
 std::string ConfigFile::effectiveLines() const {
   std::string out;
-  for (const auto& [key, node] : state_->effective) {  // std::map: sorted by key
+  for (const auto& [key, eff] : state_->effective) {  // std::map: sorted by key
     YAML::Emitter e;
     e.SetMapFormat(YAML::Flow);
     e.SetSeqFormat(YAML::Flow);
-    e << node;
+    e << eff.node;
     std::string v = e.c_str();
     for (char& c : v)
       if (c == '\n') c = ' ';
@@ -193,7 +197,14 @@ std::vector<std::string> configDifferences(const std::string& here, const std::s
 
 void ConfigFile::overrideEffective(const std::string& dotted_key, double value) {
   if (!state_->effective.count(dotted_key)) state_->effective_order.push_back(dotted_key);
-  state_->effective[dotted_key] = numberNode(value);
+  state_->effective[dotted_key].node = numberNode(value);
+}
+
+std::vector<std::string> ConfigFile::keysReadTwice() const {
+  std::vector<std::string> out;
+  for (const auto& [key, e] : state_->effective)
+    if (e.reads > 1) out.push_back(key + " (" + std::to_string(e.reads) + " reads)");
+  return out;
 }
 
 bool ConfigNode::has(const std::string& key) const { return node_.IsMap() && node_[key].IsDefined(); }
@@ -213,7 +224,9 @@ void ConfigNode::markLeaf(const std::string& key) const {
 
 void ConfigNode::recordEffective(const std::string& key, const YAML::Node& value) const {
   const std::string full = fullKey(key);
-  if (state_->effective.emplace(full, value).second) state_->effective_order.push_back(full);
+  const auto [it, added] = state_->effective.emplace(full, ConfigFile::State::Effective{value, 0});
+  ++it->second.reads;
+  if (added) state_->effective_order.push_back(full);
 }
 
 void ConfigNode::recordDefault(const std::string& key, double v) const { recordEffective(key, numberNode(v)); }

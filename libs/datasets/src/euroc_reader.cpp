@@ -83,13 +83,13 @@ EurocCameraCalibration readEurocCameraYaml(const std::string& path) {
     root.require("distortion_model", dist_model);
     root.require("distortion_coefficients", c.distortion);
     if (dist_model == "radial-tangential" || dist_model == "radtan" || dist_model == "plumb_bob") {
-      c.model = "pinhole";
+      c.model = CameraKind::Pinhole;
       // A trailing k3 = 0 (5-coefficient plumb_bob) carries no information; any other k3 is unsupported.
       if (c.distortion.size() == 5 && c.distortion[4] == 0.0) c.distortion.pop_back();
       root.check(c.distortion.size() == 4, "distortion_coefficients",
                  "radial-tangential needs [k1, k2, p1, p2], got " + std::to_string(c.distortion.size()) + " values");
     } else if (dist_model == "equidistant" || dist_model == "fisheye" || dist_model == "kannala-brandt") {
-      c.model = "equidistant";
+      c.model = CameraKind::Equidistant;
       root.check(c.distortion.size() == 4, "distortion_coefficients",
                  "equidistant needs [k1, k2, k3, k4], got " + std::to_string(c.distortion.size()) + " values");
     } else {

@@ -12,9 +12,12 @@
 namespace livo {
 
 void PipelineConfig::load(const ConfigNode& root) {
+  // Each key is read and checked once, by the config of its section; a key two parts need is read
+  // by the first loaded and handed to the other (imu.rate_hz, camera.enabled: the preprocessing's;
+  // the camera's noise, rate and time offset keys: the camera's, for the photometric update).
   preprocess.load(root);
-  lio.load(root);
-  camera.load(root);
+  lio.load(root, preprocess);
+  camera.load(root, preprocess.camera_enabled);
   selector.load(root);
   vio.load(root);
   vio.takeCamera(camera);
@@ -24,7 +27,7 @@ void PipelineConfig::load(const ConfigNode& root) {
 
 HybridMapConfig PipelineConfig::mapConfig() const {
   HybridMapConfig c = map;
-  c.mode = parseMapMode(map_mode);  // throws naming the value
+  c.mode = map_mode;
   return c;
 }
 
@@ -32,7 +35,7 @@ FramePipeline::FramePipeline(PipelineConfig cfg)
     : cfg_(std::move(cfg)),
       filter_(cfg_.lio.imu),
       lio_(cfg_.lio, filter_),
-      selector_(cfg_.selector, parseVisualMode(cfg_.visual_mode)),
+      selector_(cfg_.selector, cfg_.visual_mode),
       image_check_(cfg_.vio.pixel_noise) {
   if (cfg_.camera.enabled) {
     camera_ = CameraModel::create(cfg_.camera);

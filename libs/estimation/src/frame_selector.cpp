@@ -9,13 +9,6 @@
 
 namespace livo {
 
-VisualMode parseVisualMode(const std::string& s) {
-  if (s == "adaptive") return VisualMode::Adaptive;
-  if (s == "all") return VisualMode::All;
-  if (s == "off") return VisualMode::Off;
-  throw std::invalid_argument("visual mode must be adaptive, all or off (got '" + s + "')");
-}
-
 double FrameSelector::translationThreshold(double sigma_min) const {
   return std::sqrt(3.0) * sigma_min * cfg_.tau_translation_m;
 }

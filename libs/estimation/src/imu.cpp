@@ -6,11 +6,12 @@
 
 namespace livo {
 
-void ImuConfig::load(const ConfigNode& n) {
+void ImuConfig::load(const ConfigNode& n, double imu_rate_hz) {
+  rate_hz = imu_rate_hz;
   n.get("gyro_noise", gyro_noise).get("accel_noise", accel_noise);
   n.get("gyro_bias_walk", gyro_bias_walk).get("accel_bias_walk", accel_bias_walk);
   n.get("noise_scale", noise_scale).get("inv_exposure_walk", inv_exposure_walk);
-  n.get("gravity_m_s2", gravity_m_s2).get("rate_hz", rate_hz).get("gravity_align", gravity_align);
+  n.get("gravity_m_s2", gravity_m_s2).get("gravity_align", gravity_align);
   n.get("init_samples", init_samples).get("init_static_factor", init_static_factor);
   n.get("init_vibration_gyro_rad_s", init_vibration_gyro_rad_s).get("init_vibration_accel_mps2", init_vibration_accel_mps2);
   n.get("init_max_gyro_std", init_max_gyro_std).get("init_max_accel_std", init_max_accel_std);
@@ -30,7 +31,6 @@ void ImuConfig::load(const ConfigNode& n) {
   positiveBelow("gyro_bias_walk", gyro_bias_walk, 1.0);
   positiveBelow("accel_bias_walk", accel_bias_walk, 10.0);
   n.check(noise_scale > 0 && noise_scale < 1e3, "noise_scale", "must be in (0, 1000)");
-  n.check(rate_hz > 0 && rate_hz <= 1e5, "rate_hz", "must be in (0, 1e5] Hz");
   n.check(init_samples >= 5, "init_samples", "must be >= 5");
   n.check(gravity_m_s2 > 5 && gravity_m_s2 < 15, "gravity_m_s2", "must be about 9.8");
   n.check(init_static_factor >= 1 && init_static_factor <= 100, "init_static_factor", "must be in [1, 100]");

@@ -12,16 +12,14 @@
 
 namespace livo {
 
-void LioOdometryConfig::load(const ConfigNode& root) {
-  imu.load(root.section("imu"));
+void LioOdometryConfig::load(const ConfigNode& root, const PreprocessConfig& pre) {
+  imu.load(root.section("imu"), pre.imu_rate_hz);
   motion_init.load(root.section("imu"));
   lio.load(root);
   map.load(root.section("voxel_map"));
   const ConfigNode lidar = root.section("lidar");
-  lidar.require("T_imu_lidar", T_imu_lidar).require("model", lidar_model);
-  lidar.check(lidar_model == "avia" || lidar_model == "mid360" || lidar_model == "spinning32" ||
-                  lidar_model == "generic",
-              "model", "must be avia, mid360, spinning32 or generic, got '" + lidar_model + "'");
+  lidar.require("T_imu_lidar", T_imu_lidar);
+  requireMode(lidar, "model", lidar_model);
   root.section("lio").get("min_matches", min_matches);
 }
 

@@ -5,10 +5,8 @@
 namespace livo {
 
 void SelectorConfig::load(const ConfigNode& root) {
-  root.get("environment", environment);
-  root.check(environment == "indoor" || environment == "outdoor", "environment",
-             "must be indoor or outdoor, got '" + environment + "'");
-  tau_translation_m = environment == "outdoor" ? 2.0 : 1.0;
+  readMode(root, "environment", environment);
+  tau_translation_m = environment == Environment::Outdoor ? 2.0 : 1.0;
   const ConfigNode n = root.section("selector");
   n.get("degeneracy_threshold", degeneracy_threshold).get("degenerate_frames", degenerate_frames);
   n.get("tau_translation_m", tau_translation_m).get("tau_rotation_deg", tau_rotation_deg);

@@ -5,14 +5,6 @@
 
 namespace livo {
 
-MapMode parseMapMode(const std::string& s) {
-  if (s == "hybrid") return MapMode::Hybrid;
-  if (s == "global") return MapMode::Global;
-  throw std::invalid_argument("map mode must be hybrid or global, got '" + s + "'");
-}
-
-const char* toString(MapMode m) { return m == MapMode::Hybrid ? "hybrid" : "global"; }
-
 namespace {
 
 // Calls bad(key, what) for the first invalid field; one list shared by load() and validate().

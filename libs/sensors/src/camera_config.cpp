@@ -4,15 +4,20 @@
 
 namespace livo {
 
-void CameraConfig::load(const ConfigNode& root) {
+void CameraConfig::load(const ConfigNode& root) { loadSection(root, nullptr); }
+void CameraConfig::load(const ConfigNode& root, bool camera_enabled) { loadSection(root, &camera_enabled); }
+
+void CameraConfig::loadSection(const ConfigNode& root, const bool* camera_enabled) {
   if (!root.has("camera")) {
     enabled = false;
     return;
   }
   const ConfigNode n = root.section("camera");
   enabled = true;
-  n.get("enabled", enabled);
-  n.get("model", model).get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
+  if (camera_enabled != nullptr) enabled = *camera_enabled;
+  else n.get("enabled", enabled);
+  readMode(n, "model", model);
+  n.get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
   n.get("vignetting", vignetting);
   n.get("rate_hz", rate_hz).get("estimate_time_offset", estimate_time_offset);
   n.get("time_offset_sigma_s", time_offset_sigma_s);
@@ -29,7 +34,6 @@ void CameraConfig::load(const ConfigNode& root) {
   n.require("width", width).require("height", height);
   n.require("fx", fx).require("fy", fy).require("cx", cx).require("cy", cy);
   n.require("T_imu_camera", T_imu_camera);
-  n.check(model == "pinhole" || model == "equidistant", "model", "must be pinhole or equidistant, got '" + model + "'");
   n.check(width > 0 && width <= 16384, "width", "must be in 1..16384");
   n.check(height > 0 && height <= 16384, "height", "must be in 1..16384");
   n.check(fx > 0, "fx", "must be > 0");

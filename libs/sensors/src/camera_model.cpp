@@ -51,9 +51,11 @@ std::unique_ptr<CameraModel> CameraModel::create(const CameraConfig& cfg) {
   const int h = static_cast<int>(std::lround(cfg.height * s));
   const double fx = cfg.fx * s, fy = cfg.fy * s;
   const double cx = (cfg.cx + 0.5) * s - 0.5, cy = (cfg.cy + 0.5) * s - 0.5;
-  if (cfg.model == "pinhole") return std::make_unique<PinholeRadtan>(w, h, fx, fy, cx, cy, d);
-  if (cfg.model == "equidistant") return std::make_unique<Equidistant>(w, h, fx, fy, cx, cy, d);
-  require(false, "model", "must be pinhole or equidistant, got '" + cfg.model + "'");
+  switch (cfg.model) {
+    case CameraKind::Pinhole: return std::make_unique<PinholeRadtan>(w, h, fx, fy, cx, cy, d);
+    case CameraKind::Equidistant: return std::make_unique<Equidistant>(w, h, fx, fy, cx, cy, d);
+  }
+  require(false, "model", "is not a camera model");
   return nullptr;
 }
 

@@ -56,6 +56,9 @@ class ConfigFile {
   /// style), sorted by key: what two processes compare to find out whether they run the same rig
   /// (configDifferences).
   std::string effectiveLines() const;
+  /// Keys read more than once (by get / require), each as "dotted.key (N reads)", sorted: one config
+  /// struct per section reads and checks each of its keys once, and the others take the value from it.
+  std::vector<std::string> keysReadTwice() const;
 
  private:
   struct State;

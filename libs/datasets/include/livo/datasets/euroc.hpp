@@ -12,6 +12,7 @@
 // (default margin 1 s), because the IMU csv often covers far more than the images.
 #pragma once
 
+#include "livo/common/modes.hpp"
 #include "livo/common/types.hpp"
 #include "livo/datasets/conversion.hpp"
 
@@ -27,7 +28,7 @@ struct EurocCameraCalibration {
   int width = 0;   ///< pixels
   int height = 0;  ///< pixels
   double fx = 0, fy = 0, cx = 0, cy = 0;  ///< pixels
-  std::string model = "pinhole";          ///< suite camera model: pinhole (radtan) | equidistant
+  CameraKind model = CameraKind::Pinhole;  ///< suite camera model: pinhole (radtan) | equidistant
   std::vector<double> distortion;         ///< radtan [k1, k2, p1, p2] or equidistant [k1, k2, k3, k4]
   double rate_hz = 0;
   Eigen::Isometry3d T_body_camera = Eigen::Isometry3d::Identity();  ///< sensor.yaml T_BS

@@ -34,7 +34,7 @@ namespace livo {
 
 class FramePipeline {
  public:
-  /// Throws std::invalid_argument naming a bad visual_mode or thread count.
+  /// Throws std::invalid_argument naming a bad thread count.
   explicit FramePipeline(PipelineConfig cfg);
 
   /// Runs steps 1-7 on one frame (time order) against `map`.

@@ -15,6 +15,7 @@
 //   motion thresholds decide, and of 20-33 with a 10x noisier IMU, where nearly every image is used.
 #pragma once
 
+#include "livo/common/modes.hpp"
 #include "livo/estimation/selector_config.hpp"
 #include "livo/estimation/state.hpp"
 
@@ -22,8 +23,7 @@
 
 namespace livo {
 
-enum class VisualMode { Adaptive, All, Off };
-VisualMode parseVisualMode(const std::string& s);  ///< throws std::invalid_argument
+// VisualMode: livo/common/modes.hpp.
 
 class FrameSelector {
  public:

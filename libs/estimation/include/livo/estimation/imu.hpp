@@ -41,8 +41,10 @@ struct ImuConfig {
   double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of a gyro bias no static window observed
   double init_accel_bias_sigma_mps2 = 0.02;   ///< prior sigma of the accelerometer bias (never observed at start)
 
-  /// Reads the `imu` section (noise densities, rate, initialisation); errors name the key.
-  void load(const ConfigNode& imu);
+  /// Reads the `imu` section (noise densities, initialisation); errors name the key. The rate,
+  /// imu.rate_hz, is read and checked by the preprocessing's config (PreprocessConfig, loaded first by
+  /// PipelineConfig) and given as `rate_hz`.
+  void load(const ConfigNode& imu, double rate_hz);
   /// Static-test thresholds: RMS deviation of a static window, gyro rad/s and accel m/s^2.
   double staticGyroThreshold() const;
   double staticAccelThreshold() const;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/modes.hpp"
 #include "livo/estimation/esikf.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/imu_init.hpp"
@@ -11,6 +12,7 @@
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/point_cov.hpp"
 #include "livo/map/voxel_map_config.hpp"
+#include "livo/sensors/preprocess_config.hpp"
 
 #include <memory>
 #include <string>
@@ -23,11 +25,12 @@ struct LioOdometryConfig {
   LioConfig lio;
   VoxelMapConfig map;
   Pose T_imu_lidar = Pose::Identity();
-  std::string lidar_model = "generic";  ///< lidar.model: avia | mid360 | spinning32 | generic
+  LidarModel lidar_model = LidarModel::Generic;  ///< lidar.model (required)
   int min_matches = 20;  ///< fewer matched points: the update is skipped and the frame flagged
 
-  /// Reads the rig sections imu, lidar (T_imu_lidar required) and the lio / voxel_map sections.
-  void load(const ConfigNode& root);
+  /// Reads the rig sections imu, lidar (T_imu_lidar required) and the lio / voxel_map sections; the
+  /// keys the preprocessing reads (imu.rate_hz) come from `pre`.
+  void load(const ConfigNode& root, const PreprocessConfig& pre);
 };
 
 /// What one frame produced (LiDAR-inertial part).

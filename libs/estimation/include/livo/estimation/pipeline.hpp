@@ -19,7 +19,7 @@ namespace livo {
 class Pipeline {
  public:
   using FrameCallback = std::function<void(const Frame&, const FrameResult&)>;
-  /// Throws std::invalid_argument naming a bad visual_mode / map_mode.
+  /// Throws std::invalid_argument naming a bad thread count.
   explicit Pipeline(PipelineConfig cfg);
 
   void addImu(const ImuSample& s) { recombiner_.addImu(s); }

@@ -22,15 +22,15 @@ struct PipelineConfig {
   VioConfig vio;
   VisualMapConfig visual_map;
   HybridMapConfig map;  ///< section `map`; its mode comes from map_mode
-  std::string visual_mode = "adaptive";  ///< adaptive | all | off (command line)
-  std::string map_mode = "hybrid";       ///< hybrid | global (command line; overrides map.mode)
+  VisualMode visual_mode = VisualMode::Adaptive;  ///< command line --visual-mode
+  MapMode map_mode = MapMode::Hybrid;             ///< command line --map-mode
   /// Threads of the per-frame loops (command line `--threads`; 1: none started). Results are the same
   /// for every count (worker_pool.hpp).
   int threads = 1;
 
   /// Reads every section a rig config may hold that the pipeline uses (not channels).
   void load(const ConfigNode& root);
-  /// The map section with the mode of map_mode (throws std::invalid_argument naming a bad value).
+  /// The map section with the mode of map_mode.
   HybridMapConfig mapConfig() const;
 };
 

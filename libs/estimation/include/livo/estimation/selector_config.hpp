@@ -3,13 +3,14 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/modes.hpp"
 
 #include <string>
 
 namespace livo {
 
 struct SelectorConfig {
-  std::string environment = "indoor";  ///< indoor | outdoor
+  Environment environment = Environment::Indoor;
   double degeneracy_threshold = 0.15;  ///< sigma_min = sqrt(lambda_min / N) below this: degenerate
   int degenerate_frames = 3;           ///< consecutive degenerate frames before the state is declared
   double tau_translation_m = 1.0;      ///< tau_predef translation (defaults: indoor 1 m, outdoor 2 m)

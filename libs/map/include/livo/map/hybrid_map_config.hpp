@@ -5,19 +5,15 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/modes.hpp"
 
 #include <cstddef>
 #include <string>
 
 namespace livo {
 
-/// hybrid: local cube + long-term visual map + memory cap (this project).
-/// global: one unbounded map, never slid nor evicted (FAST-LIVO2 behaviour).
-enum class MapMode { Hybrid, Global };
-
-/// "hybrid" | "global"; throws std::invalid_argument naming the value otherwise.
-MapMode parseMapMode(const std::string& s);
-const char* toString(MapMode m);
+// MapMode (livo/common/modes.hpp): hybrid: local cube + long-term visual map + memory cap (this
+// project); global: one unbounded map, never slid nor evicted (FAST-LIVO2 behaviour).
 
 struct HybridMapConfig {
   MapMode mode = MapMode::Hybrid;  ///< command line (--map-mode), not read from the file

@@ -84,7 +84,6 @@ class VoxelMap : public PlaneFinder {
   /// exist). The path holds the child index per layer below the root, -1 beyond the leaf's layer.
   void forEachPlaneIn(const VoxelKey& key,
                       const std::function<void(const Plane&, const std::array<std::int8_t, 3>&)>& f) const;
-  bool hasVoxel(const VoxelKey& key) const { return roots_.count(key) != 0; }
 
   /// Drops every root voxel whose centre lies outside the axis-aligned cube of half edge
   /// `half_edge_m` around `center` (|c_i - center_i| > half_edge_m on some axis). Returns the count.

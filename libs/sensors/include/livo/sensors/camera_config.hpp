@@ -2,6 +2,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/modes.hpp"
 #include "livo/common/so3.hpp"
 
 #include <string>
@@ -11,7 +12,7 @@ namespace livo {
 
 struct CameraConfig {
   bool enabled = false;          ///< absent section: no camera
-  std::string model = "pinhole"; ///< pinhole (radtan k1 k2 p1 p2) | equidistant (Kannala-Brandt k1..k4)
+  CameraKind model = CameraKind::Pinhole; ///< pinhole (radtan k1 k2 p1 p2) | equidistant (Kannala-Brandt k1..k4)
   int width = 0, height = 0;     ///< pixels (required when enabled)
   double fx = 0, fy = 0, cx = 0, cy = 0;  ///< pixels (required when enabled)
   std::vector<double> distortion;  ///< 4 coefficients (or empty = none)
@@ -28,6 +29,12 @@ struct CameraConfig {
   /// Reads the `camera` section of a rig config; keys owned by the preprocessing (time_offset_s) are
   /// read there. Throws ConfigError naming the key when a required one is missing or invalid.
   void load(const ConfigNode& root);
+  /// The same with camera.enabled taken from `enabled` (read by PreprocessConfig, which the pipeline
+  /// loads first): not read again.
+  void load(const ConfigNode& root, bool enabled);
+
+ private:
+  void loadSection(const ConfigNode& root, const bool* enabled);
 };
 
 }  // namespace livo
