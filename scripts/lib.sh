@@ -6,7 +6,8 @@ LIVO_BUILD="${LIVO_BUILD:-$LIVO_ROOT/build}"
 LIVO_JOBS="${LIVO_JOBS:-2}"
 
 # Debian bookworm packages. LIVO_DEMO_PACKAGES build and run the README demo (scripts/run-demo: livo-sim,
-# livo-run, livo-eval, livo-report); lcm.pc needs libglib2.0-dev. LIVO_PACKAGES is everything else the
+# livo-run, livo-eval, livo-report); lcm.pc needs libglib2.0-dev; libceres-dev: libs/loop's pose graph
+# (every library is configured, also for the demo). LIVO_PACKAGES is everything else the
 # suite builds, tests and inspects with (scripts/run-tests, scripts/setup):
 #   libgtest-dev: the tests; liblcm-java, default-jdk-headless, libjchart2d-java: lcm-spy (scripts/livo-spy);
 #   default-jre: AWT for lcm-spy's window (the headless JDK has none);
@@ -20,7 +21,7 @@ LIVO_JOBS="${LIVO_JOBS:-2}"
 LIVO_DEMO_PACKAGES=(
   build-essential cmake pkg-config ccache git
   liblcm-dev liblcm-bin libglib2.0-dev
-  libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libyaml-cpp-dev
+  libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libyaml-cpp-dev libceres-dev
   python3 python3-matplotlib
 )
 LIVO_PACKAGES=(
