@@ -1,0 +1,74 @@
+// Loop closure over an odometry: keyframes, place search, geometric verification and the pose graph
+// composed in one object, fed one odometry pose (and, on keyframes, its registered scan) at a time. The
+// livo-loop process and livo-run --loop adapt it; docs/algorithms.md section 11.
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/common/types.hpp"
+#include "livo/loop/loop_verifier.hpp"
+#include "livo/loop/place_database.hpp"
+#include "livo/loop/pose_graph.hpp"
+
+#include <functional>
+#include <vector>
+
+namespace livo {
+
+struct LoopConfig {
+  KeyframeConfig keyframes;
+  PlaceDescriptorConfig descriptor;
+  PlaceSearchConfig search;
+  LoopVerifyConfig verify;
+  PoseGraphConfig graph;
+  /// loop.keyframe_points_m: a keyframe keeps one point per cube of this edge, within the descriptor's
+  /// range (what verification registers against), in single precision
+  double keyframe_points_m = 0.25;
+  int verify_candidates = 3;        ///< loop.verify_candidates: best candidates checked until one is accepted
+
+  /// Reads the `loop` section. The LiDAR's keys are read by their own sections' configs and handed in:
+  /// lidar.max_range_m (bounds the descriptor), lidar.range_noise_m and lidar.beam_noise_deg (the
+  /// verification's residual bound and point covariance).
+  void load(const ConfigNode& loop, double lidar_max_range_m, double range_noise_m, double beam_noise_deg);
+};
+
+/// What one odometry pose did.
+struct LoopStep {
+  bool keyframe = false;
+  int node = -1;        ///< the keyframe's index (graph node, database entry)
+  int candidates = 0;   ///< places the search proposed
+  int checked = 0;      ///< of them verified
+  bool loop = false;    ///< a loop was accepted and the graph solved
+  int loop_with = -1;   ///< the keyframe it closed with
+  LoopCheck check;      ///< the last verification's result
+  PoseGraphReport graph;
+};
+
+class LoopCloser {
+ public:
+  explicit LoopCloser(LoopConfig cfg);
+  /// Takes the next odometry pose (body in the odometry frame). On a keyframe, `scan` is called for the
+  /// frame's registered points in the odometry frame; the place is searched, candidates verified and, on
+  /// a loop, the graph solved.
+  LoopStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
+  /// T_map_odom: the odometry frame in the map frame (identity until a loop is closed).
+  const Pose& correction() const { return graph_.correction(); }
+  /// A pose of the odometry in the map frame.
+  Pose toMap(const Pose& T_odom_body) const { return graph_.correction() * T_odom_body; }
+  const PoseGraph& graph() const { return graph_; }
+  const PlaceDatabase& places() const { return places_; }
+  const LoopCheckCounts& checks() const { return verifier_.counts(); }
+  int loopsAccepted() const { return graph_.loops(); }
+  /// Keyframe points held (12 bytes each: the stored scans dominate the memory).
+  std::size_t pointsHeld() const { return points_held_; }
+
+ private:
+  LoopConfig cfg_;
+  KeyframeSelector selector_;
+  PlaceDatabase places_;
+  LoopVerifier verifier_;
+  PoseGraph graph_;
+  std::vector<std::vector<Eigen::Vector3f>> points_;  // per keyframe, in its keyframe frame, thinned
+  std::size_t points_held_ = 0;
+};
+
+}  // namespace livo

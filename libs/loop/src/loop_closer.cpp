@@ -1,0 +1,68 @@
+#include "livo/loop/loop_closer.hpp"
+
+#include <cmath>
+
+namespace livo {
+
+void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double range_noise_m, double beam_noise_deg) {
+  keyframes.load(loop);
+  descriptor.load(loop, lidar_max_range_m);
+  search.load(loop, descriptor);
+  verify.load(loop, range_noise_m, beam_noise_deg);
+  graph.load(loop);
+  loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
+  loop.check(std::isfinite(keyframe_points_m) && keyframe_points_m > 0 && keyframe_points_m <= 10, "keyframe_points_m",
+             "must be in (0, 10] m");
+  loop.check(verify_candidates >= 1 && verify_candidates <= 100, "verify_candidates", "must be in [1, 100]");
+}
+
+LoopCloser::LoopCloser(LoopConfig cfg)
+    : cfg_(cfg), selector_(cfg_.keyframes), places_(cfg_.search), verifier_(cfg_.verify), graph_(cfg_.graph) {}
+
+LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
+  LoopStep step;
+  if (!selector_.offer(T_odom_body)) return step;
+  step.keyframe = true;
+  const Pose K = keyframeFrame(T_odom_body);
+  const Pose K_inv = K.inverse();
+  std::vector<Vec3> local = scan();
+  for (Vec3& p : local) p = K_inv * p;
+
+  PlaceEntry e;
+  e.utime = t;
+  e.path_m = selector_.pathLength();
+  e.T_world_body = T_odom_body;
+  e.descriptor = PlaceDescriptor::compute(local, cfg_.descriptor);
+  const std::vector<PlaceCandidate> cands = places_.search(e.descriptor, e.path_m);
+  step.candidates = static_cast<int>(cands.size());
+  step.node = graph_.addKeyframe(K);
+
+  for (const PlaceCandidate& c : cands) {
+    if (step.checked >= cfg_.verify_candidates) break;
+    ++step.checked;
+    const PlaceEntry& other = places_.entry(c.id);
+    const Pose T_odom_rel = keyframeFrame(other.T_world_body).inverse() * K;
+    const auto& stored = points_[static_cast<std::size_t>(c.id)];
+    std::vector<Vec3> cand(stored.size());
+    for (std::size_t i = 0; i < stored.size(); ++i) cand[i] = stored[i].cast<double>();
+    step.check = verifier_.verify(cand, local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
+    if (!step.check.accepted) continue;
+    graph_.addLoop(c.id, step.node, step.check.T_cand_query);
+    step.graph = graph_.optimize();
+    step.loop = true;
+    step.loop_with = c.id;
+    break;
+  }
+
+  places_.add(std::move(e));
+  std::vector<Eigen::Vector3f> kept;
+  const double r2 = cfg_.descriptor.max_range_m * cfg_.descriptor.max_range_m;
+  for (const Vec3& p : thinPoints(local, cfg_.keyframe_points_m))
+    if (p.head<2>().squaredNorm() <= r2) kept.push_back(p.cast<float>());
+  kept.shrink_to_fit();
+  points_held_ += kept.size();
+  points_.push_back(std::move(kept));
+  return step;
+}
+
+}  // namespace livo

@@ -1,0 +1,101 @@
+// Loop closure end to end in the library (libs/loop loop_closer): the simulator's revisit scenario with an
+// odometry that drifts (scale and heading), its registered scans at the drifted poses; the map-frame
+// keyframe poses against the truth, before and after the loops.
+// livo-test-deps: livo_sim
+// livo-test-whole
+#include "livo/loop/loop_closer.hpp"
+#include "loop_test_util.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace livo {
+namespace {
+
+struct DriftedRun {
+  double odom_max_m = 0.0, odom_rms_m = 0.0, map_max_m = 0.0, map_rms_m = 0.0;
+  int keyframes = 0, loops = 0, false_loops = 0;
+  LoopCheckCounts checks;
+  std::size_t points_held = 0;
+};
+
+// The odometry: every scan-to-scan step of the truth, 0.5 % too long and turned 0.004 deg too far (about
+// 5 m and 5 deg over the 1040 m). A loop is false when the truth puts its keyframes more than 4 m apart.
+DriftedRun runDrifted(LoopConfig cfg) {
+  const sim::Simulator s(test::revisitScenario());
+  LoopCloser closer(cfg);
+  DriftedRun out;
+  const std::int64_t scans = static_cast<std::int64_t>(s.scenario().duration_s * s.scenario().lidar.rate_hz) - 1;
+  Pose odom = s.T_world_imu(s.lidarUtime(0));
+  Pose prev_truth = odom;
+  std::vector<Pose> truth_of_node, odom_of_node;
+  for (std::int64_t j = 0; j < scans; ++j) {
+    const Pose truth = s.T_world_imu(s.lidarUtime(j));
+    if (j > 0) {
+      Pose step = prev_truth.inverse() * truth;
+      step.translation() *= 1.005;
+      step.linear() = Eigen::AngleAxisd(0.004 * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix() * step.linear();
+      odom = odom * step;
+    }
+    prev_truth = truth;
+    const Pose drift = odom * truth.inverse();  // odometry frame <- world, at this scan
+    const LoopStep st = closer.add(s.lidarUtime(j), odom, [&] {
+      std::vector<Vec3> pts = test::worldScan(s, j);
+      for (Vec3& p : pts) p = drift * p;
+      return pts;
+    });
+    if (!st.keyframe) continue;
+    truth_of_node.push_back(truth);
+    odom_of_node.push_back(odom);
+    if (st.loop && (truth_of_node[std::size_t(st.loop_with)].translation() - truth.translation()).norm() > 4.0)
+      ++out.false_loops;
+  }
+  double so = 0, sm = 0;
+  const std::size_t n = truth_of_node.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double eo = (odom_of_node[i].translation() - truth_of_node[i].translation()).norm();
+    const double em = (closer.graph().mapPose(int(i)).translation() - truth_of_node[i].translation()).norm();
+    out.odom_max_m = std::max(out.odom_max_m, eo);
+    out.map_max_m = std::max(out.map_max_m, em);
+    so += eo * eo;
+    sm += em * em;
+  }
+  out.odom_rms_m = std::sqrt(so / double(n));
+  out.map_rms_m = std::sqrt(sm / double(n));
+  out.keyframes = int(n);
+  out.loops = closer.loopsAccepted();
+  out.checks = closer.checks();
+  out.points_held = closer.pointsHeld();
+  return out;
+}
+
+LoopConfig defaults(const sim::SimScenario& sc) {
+  const ConfigFile f = ConfigFile::parse("loop: {}\n", "rig.yaml");
+  LoopConfig cfg;
+  cfg.load(f.root().section("loop"), sc.lidar.max_range_m, sc.lidar.range_noise_m, sc.lidar.beam_noise_deg);
+  return cfg;
+}
+
+TEST(LoopCloser, PullsADriftedOdometryBackOnTheRevisits) {
+  const DriftedRun r = runDrifted(defaults(test::revisitScenario()));
+  const LoopCheckCounts& c = r.checks;
+  std::printf("revisit, drifted odometry: %d keyframes, keyframe position error rms %.3f m max %.3f m (odometry) -> "
+              "rms %.3f m max %.3f m (map frame); %d loops accepted, %d false; checks: %d accepted, %d too few "
+              "points, %d not converged, %d low overlap, %d high residual, %d inconsistent; %zu points held\n",
+              r.keyframes, r.odom_rms_m, r.odom_max_m, r.map_rms_m, r.map_max_m, r.loops, r.false_loops, c.accepted,
+              c.too_few_points, c.no_convergence, c.low_overlap, c.high_residual, c.inconsistent, r.points_held);
+  // 2026-12-06: 383 keyframes; odometry rms 2.61 m, max 5.70 m -> map frame rms 0.292 m, max 0.414 m (the
+  // first lap keeps the drift it had before its end came back to its start); 246 loops, none false;
+  // 4.08 M keyframe points held (49 MB).
+  EXPECT_EQ(r.false_loops, 0);
+  EXPECT_GE(r.loops, 200);
+  EXPECT_GT(r.odom_max_m, 5.0);
+  EXPECT_LT(r.map_rms_m, 0.6);
+  EXPECT_LT(r.map_max_m, 0.85);
+  EXPECT_EQ(r.checks.accepted, r.loops);
+}
+
+}  // namespace
+}  // namespace livo
