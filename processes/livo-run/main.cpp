@@ -1,9 +1,10 @@
 // livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off] [--map-mode hybrid|global]
-//          [--threads N] [--max-frames N] [--no-maps] [--progress] [--quiet] [--print-config]
+//          [--threads N] [--max-frames N] [--no-maps] [--loop] [--progress] [--quiet] [--print-config]
 //
 // Runs the whole pipeline in one process (no network) on an LCM log, as fast as possible:
 // log events -> validated structs -> frame builder (recut sweeps + IMU + image) -> odometry -> outputs.
-// Writes DIR/trajectory.tum, DIR/frames.csv (map_bytes: see MapBytes in run_log.cpp), DIR/stats.json; a
+// Writes DIR/trajectory.tum, DIR/frames.csv (map_bytes: see MapBytes in run_log.cpp), DIR/stats.json (with
+// --loop also DIR/trajectory_map.tum, the trajectory in the loop-corrected map frame); a
 // progress line on stderr and a summary on stdout. A truncated or corrupt log stops the run with an
 // error after writing what was processed.
 #include "run_log.hpp"
@@ -36,6 +37,9 @@ void addOptions(CommandLine& cl, livo_run::Args& a) {
   cl.flag("--no-maps", &a.no_maps,
           "skip map.pcd / map.bt (their point store and ray casting cost time and memory of their own: "
           "benchmarks of the odometry use --no-maps)");
+  cl.flag("--loop", &a.loop,
+          "loop closure: keyframes, place recognition, verified loops and a pose graph (config section `loop`); "
+          "writes trajectory_map.tum, the trajectory in the corrected map frame, and loop_* counters");
   addProgressOption(cl, &a.progress);
   cl.flag("--quiet", &a.quiet, "no progress line and no preprocessing summary");
   cl.flag("--print-config", &a.print_config, kPrintConfigHelp);
@@ -46,6 +50,9 @@ ConfigFile loadConfig(const livo_run::Args& args, livo_run::Config& cfg) {
   ConfigFile file = ConfigFile::load(args.config);
   const ConfigNode root = file.root();
   cfg.pipe.load(root);
+  // The loop section takes the LiDAR's range and noise from the configs that read them.
+  cfg.loop.load(root.section("loop"), cfg.pipe.preprocess.max_range_m, cfg.pipe.lio.lio.range_noise_m,
+                cfg.pipe.lio.lio.beam_noise_deg);
   cfg.channels.load(root.section("channels"));
   cfg.exporter.load(root.section("exporter"));
   EstimatorNodeConfig{}.load(root.section("estimator"));  // livo-estimator's section: checked, not used here

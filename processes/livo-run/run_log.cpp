@@ -3,6 +3,7 @@
 #include "livo/cli/command_line.hpp"
 #include "livo/cli/progress.hpp"
 #include "livo/common/timing.hpp"
+#include "livo/eval/tum.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/frame_row.hpp"
 #include "livo/io/image_convert.hpp"
@@ -15,6 +16,7 @@
 #include <limits>
 #include <iostream>
 #include <map>
+#include <optional>
 
 namespace livo_run {
 
@@ -57,6 +59,84 @@ class MapBytes {
   std::uint64_t counted_ = 0;
 };
 
+/// --loop: every posed frame goes to the LoopCloser (its registered points on keyframes); at the end
+/// trajectory_map.tum holds every frame in the map frame of the final graph (the frame's odometry pose
+/// carried by the correction of the last keyframe at or before it) and the loop_* counters go into
+/// stats.json.
+class LoopRun {
+ public:
+  explicit LoopRun(const LoopConfig& cfg) : closer_(cfg) {}
+
+  void add(const Frame& frame, const FrameResult& r) {
+    if (!r.lio.initialized) return;
+    const Pose T = r.lio.state.pose();
+    Stopwatch watch;
+    const LoopStep st = closer_.add(frame.utime, T, [&] {
+      std::vector<Vec3> world;
+      world.reserve(r.lio.points.size());
+      for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
+      return world;
+    });
+    ms_ += watch.elapsedMs();
+    search_ms_ += st.search_ms;
+    verify_ms_ += st.verify_ms;
+    graph_ms_ += st.graph_ms;
+    if (st.keyframe) last_key_ = st.node;
+    candidates_ += st.candidates;
+    solves_ += st.loop;
+    frames_.push_back({frame.utime, T, last_key_});
+  }
+
+  void write(const std::string& dir) const {
+    TumWriter tum(dir + "/trajectory_map.tum");
+    const PoseGraph& g = closer_.graph();
+    for (const FramePose& f : frames_) {
+      if (f.key < 0) continue;
+      tum.write(toSeconds(f.utime), g.mapPose(f.key) * g.odometryPose(f.key).inverse() * f.T_odom);
+    }
+  }
+
+  void addCounters(Counters& c) const {
+    const LoopCheckCounts& n = closer_.checks();
+    c["loop_keyframes"] = double(closer_.graph().size());
+    c["loop_candidates"] = double(candidates_);
+    c["loop_checks"] = double(n.total());
+    c["loop_accepted"] = double(n.accepted);
+    c["loop_rejected_too_few_points"] = double(n.too_few_points);
+    c["loop_rejected_no_convergence"] = double(n.no_convergence);
+    c["loop_rejected_low_overlap"] = double(n.low_overlap);
+    c["loop_rejected_high_residual"] = double(n.high_residual);
+    c["loop_rejected_inconsistent"] = double(n.inconsistent);
+    c["loop_graph_solves"] = double(solves_);
+    c["loop_points_held"] = double(closer_.pointsHeld());
+    c["loop_ms_total"] = ms_;
+    c["loop_ms_search"] = search_ms_;
+    c["loop_ms_verify"] = verify_ms_;
+    c["loop_ms_graph"] = graph_ms_;
+  }
+
+  std::string summary() const {
+    const LoopCheckCounts& n = closer_.checks();
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "loop closure: %zu keyframes, %d candidates, %d checked, %d loops accepted; %.0f ms in all; "
+                  "trajectory_map.tum\n",
+                  closer_.graph().size(), candidates_, n.total(), n.accepted, ms_);
+    return buf;
+  }
+
+ private:
+  struct FramePose {
+    Utime utime;
+    Pose T_odom;
+    int key;
+  };
+  LoopCloser closer_;
+  std::vector<FramePose> frames_;
+  int last_key_ = -1, candidates_ = 0, solves_ = 0;
+  double ms_ = 0.0, search_ms_ = 0.0, verify_ms_ = 0.0, graph_ms_ = 0.0;
+};
+
 /// What happens with each frame result: its points into map.pcd (camera gray where an image saw the
 /// point) and map.bt (OctoMap from the scan rays), its frames.csv / trajectory.tum row, the
 /// initialisation message, the --max-frames stop.
@@ -65,12 +145,15 @@ class FrameSink {
   FrameSink(const Args& args, const Config& cfg, const Pipeline& pipeline, RunOutputs& outputs, Counters& counters,
             ProgressLine& progress)
       : cloud(cfg.exporter), occupancy(cfg.exporter), args_(args), cfg_(cfg), pipeline_(pipeline),
-        outputs_(outputs), counters_(counters), progress_(progress), map_bytes_(pipeline) {}
+        outputs_(outputs), counters_(counters), progress_(progress), map_bytes_(pipeline) {
+    if (args.loop) loop.emplace(cfg.loop);
+  }
 
   void operator()(const Frame& frame, const FrameResult& r) {
     if (stop_) return;
     if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
     outputs_.addFrame(record(frame, r));
+    if (loop) loop->add(frame, r);
     health.addFrame(frame.utime, r.lio.initialized, r.lidarFailed(), r.visual_used, r.degenerate);
     explain(frame, r);
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
@@ -91,6 +174,7 @@ class FrameSink {
   MapCloud cloud;
   OccupancyMap occupancy;
   RunHealth health;
+  std::optional<LoopRun> loop;  ///< with --loop
   std::string last_wait;  ///< what the initialisation waited for at the last frame without a pose
 
  private:
@@ -273,6 +357,10 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   }
   counters["map_pcd_points"] = double(sink.cloud.size());
   addStatsCounters(pst, hs.counters, counters);
+  if (sink.loop) {
+    sink.loop->write(args.out);
+    sink.loop->addCounters(counters);
+  }
   counters["map_bt_scans_dropped"] = double(sink.occupancy.scansDropped());
   counters["map_bt_scans_capped"] = double(sink.occupancy.scansCapped());
   const ImageCheckCounters& ic = pipeline.frames().imageCounters();
@@ -286,12 +374,14 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
                                            {"threads", std::to_string(args.threads)},
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
+  if (args.loop) notes["loop"] = "on";
   if (const std::string note = sink.occupancy.capNote(); !note.empty()) notes["map_bt"] = note;
   if (!sink.health.anyPose())
     sink.health.no_pose_reason = outputs.frames() == 0 ? "no complete frame in the log (LiDAR scans with IMU samples)"
                                                         : "never initialised: " + sink.last_wait;
   outputs.writeStats(ms, rss, counters, notes, &sink.health);
   std::cout << outputs.summary(rss);
+  if (sink.loop) std::cout << sink.loop->summary();
   if (!args.quiet) std::cout << "preprocessing:\n" << pst.summary() << "\n";
   std::cout << "outputs in " << args.out << "\n";
   if (!log_error.empty()) {

@@ -5,6 +5,7 @@
 #include "livo/common/worker_pool.hpp"
 #include "livo/estimation/pipeline.hpp"
 #include "livo/io/channels.hpp"
+#include "livo/loop/loop_closer.hpp"
 #include "livo/process/map_export.hpp"
 
 #include <cstdint>
@@ -21,6 +22,7 @@ struct Args {
   bool quiet = false;
   bool progress = false;  ///< the progress line also when stderr is not a terminal
   bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)
+  bool loop = false;     ///< loop closure (libs/loop): trajectory_map.tum and the loop counters
   std::int64_t max_frames = -1;
   bool print_config = false;
 };
@@ -30,10 +32,11 @@ struct Config {
   livo::PipelineConfig pipe;
   livo::ChannelConfig channels;
   livo::MapExportConfig exporter;
+  livo::LoopConfig loop;  ///< section `loop` (read and checked always, used with --loop)
 };
 
 /// Replays args.log through the pipeline and writes args.out (trajectory.tum, frames.csv, stats.json,
-/// map.pcd, map.bt), a progress line on stderr and a summary on stdout. Returns kExitOk, or kExitRunError
+/// map.pcd, map.bt; with --loop trajectory_map.tum), a progress line on stderr and a summary on stdout. Returns kExitOk, or kExitRunError
 /// after writing what was processed when the log is truncated or corrupt; throws on other run-time
 /// errors (missing log, unwritable output directory).
 int runLog(const Args& args, const Config& cfg);

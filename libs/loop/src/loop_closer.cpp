@@ -1,5 +1,7 @@
 #include "livo/loop/loop_closer.hpp"
 
+#include "livo/common/timing.hpp"
+
 #include <cmath>
 
 namespace livo {
@@ -11,6 +13,8 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   verify.load(loop, range_noise_m, beam_noise_deg);
   graph.load(loop);
   loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
+  loop.get("loop_spacing_m", loop_spacing_m);
+  loop.check(std::isfinite(loop_spacing_m) && loop_spacing_m >= 0, "loop_spacing_m", "must be >= 0");
   loop.check(std::isfinite(keyframe_points_m) && keyframe_points_m > 0 && keyframe_points_m <= 10, "keyframe_points_m",
              "must be in (0, 10] m");
   loop.check(verify_candidates >= 1 && verify_candidates <= 100, "verify_candidates", "must be in [1, 100]");
@@ -28,29 +32,37 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
   std::vector<Vec3> local = scan();
   for (Vec3& p : local) p = K_inv * p;
 
+  Stopwatch watch;
   PlaceEntry e;
   e.utime = t;
   e.path_m = selector_.pathLength();
   e.T_world_body = T_odom_body;
   e.descriptor = PlaceDescriptor::compute(local, cfg_.descriptor);
-  const std::vector<PlaceCandidate> cands = places_.search(e.descriptor, e.path_m);
+  const bool search = e.path_m - last_loop_path_m_ >= cfg_.loop_spacing_m;
+  const std::vector<PlaceCandidate> cands = search ? places_.search(e.descriptor, e.path_m) : std::vector<PlaceCandidate>{};
   step.candidates = static_cast<int>(cands.size());
   step.node = graph_.addKeyframe(K);
+  step.search_ms = watch.elapsedMs();
 
   for (const PlaceCandidate& c : cands) {
     if (step.checked >= cfg_.verify_candidates) break;
     ++step.checked;
+    Stopwatch check_watch;
     const PlaceEntry& other = places_.entry(c.id);
     const Pose T_odom_rel = keyframeFrame(other.T_world_body).inverse() * K;
     const auto& stored = points_[static_cast<std::size_t>(c.id)];
     std::vector<Vec3> cand(stored.size());
     for (std::size_t i = 0; i < stored.size(); ++i) cand[i] = stored[i].cast<double>();
     step.check = verifier_.verify(cand, local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
+    step.verify_ms += check_watch.elapsedMs();
     if (!step.check.accepted) continue;
     graph_.addLoop(c.id, step.node, step.check.T_cand_query);
+    Stopwatch graph_watch;
     step.graph = graph_.optimize();
+    step.graph_ms = graph_watch.elapsedMs();
     step.loop = true;
     step.loop_with = c.id;
+    last_loop_path_m_ = e.path_m;
     break;
   }
 

@@ -24,6 +24,9 @@ struct LoopConfig {
   /// range (what verification registers against), in single precision
   double keyframe_points_m = 0.25;
   int verify_candidates = 3;        ///< loop.verify_candidates: best candidates checked until one is accepted
+  /// loop.loop_spacing_m: after an accepted loop, keyframes within this much travel are stored but not
+  /// searched (a revisit gives one loop every few keyframes, not one at each)
+  double loop_spacing_m = 10.0;
 
   /// Reads the `loop` section. The LiDAR's keys are read by their own sections' configs and handed in:
   /// lidar.max_range_m (bounds the descriptor), lidar.range_noise_m and lidar.beam_noise_deg (the
@@ -41,6 +44,7 @@ struct LoopStep {
   int loop_with = -1;   ///< the keyframe it closed with
   LoopCheck check;      ///< the last verification's result
   PoseGraphReport graph;
+  double search_ms = 0.0, verify_ms = 0.0, graph_ms = 0.0;  ///< time of the descriptor + search, checks, solve
 };
 
 class LoopCloser {
@@ -69,6 +73,7 @@ class LoopCloser {
   PoseGraph graph_;
   std::vector<std::vector<Eigen::Vector3f>> points_;  // per keyframe, in its keyframe frame, thinned
   std::size_t points_held_ = 0;
+  double last_loop_path_m_ = -1e300;
 };
 
 }  // namespace livo
