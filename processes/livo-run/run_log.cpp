@@ -83,11 +83,15 @@ class LoopRun {
     graph_ms_ += st.graph_ms;
     if (st.keyframe) last_key_ = st.node;
     candidates_ += st.candidates;
-    solves_ += st.loop;
+    solves_ += st.solved;
     frames_.push_back({frame.utime, T, last_key_});
   }
 
-  void write(const std::string& dir) const {
+  void write(const std::string& dir) {
+    Stopwatch watch;
+    if (closer_.finish()) ++solves_;
+    graph_ms_ += watch.elapsedMs();
+    ms_ += watch.elapsedMs();
     TumWriter tum(dir + "/trajectory_map.tum");
     const PoseGraph& g = closer_.graph();
     for (const FramePose& f : frames_) {

@@ -13,7 +13,8 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   verify.load(loop, range_noise_m, beam_noise_deg);
   graph.load(loop);
   loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
-  loop.get("loop_spacing_m", loop_spacing_m);
+  loop.get("loop_spacing_m", loop_spacing_m).get("solve_sigmas", solve_sigmas);
+  loop.check(std::isfinite(solve_sigmas) && solve_sigmas >= 0, "solve_sigmas", "must be >= 0 (0: solve at every loop)");
   loop.check(std::isfinite(loop_spacing_m) && loop_spacing_m >= 0, "loop_spacing_m", "must be >= 0");
   loop.check(std::isfinite(keyframe_points_m) && keyframe_points_m > 0 && keyframe_points_m <= 10, "keyframe_points_m",
              "must be in (0, 10] m");
@@ -22,6 +23,12 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
 
 LoopCloser::LoopCloser(LoopConfig cfg)
     : cfg_(cfg), selector_(cfg_.keyframes), places_(cfg_.search), verifier_(cfg_.verify), graph_(cfg_.graph) {}
+
+bool LoopCloser::finish() {
+  if (!unsolved_loops_) return false;
+  unsolved_loops_ = false;
+  return graph_.optimize().solved;
+}
 
 LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
   LoopStep step;
@@ -56,10 +63,20 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
     step.check = verifier_.verify(cand, local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
     step.verify_ms += check_watch.elapsedMs();
     if (!step.check.accepted) continue;
+    // The loop against the map frame as it stands: where it agrees, the solve can wait.
+    const Pose err = (graph_.mapPose(c.id).inverse() * graph_.mapPose(step.node)).inverse() * step.check.T_cand_query;
+    const bool agrees = err.translation().norm() < cfg_.solve_sigmas * cfg_.graph.loop_sigma_m &&
+                        rotationAngle(err.linear()) < cfg_.solve_sigmas * cfg_.graph.loop_sigma_deg * M_PI / 180.0;
     graph_.addLoop(c.id, step.node, step.check.T_cand_query);
-    Stopwatch graph_watch;
-    step.graph = graph_.optimize();
-    step.graph_ms = graph_watch.elapsedMs();
+    if (agrees) {
+      unsolved_loops_ = true;
+    } else {
+      Stopwatch graph_watch;
+      step.graph = graph_.optimize();
+      step.graph_ms = graph_watch.elapsedMs();
+      step.solved = true;
+      unsolved_loops_ = false;
+    }
     step.loop = true;
     step.loop_with = c.id;
     last_loop_path_m_ = e.path_m;

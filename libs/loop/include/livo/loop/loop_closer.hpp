@@ -27,6 +27,9 @@ struct LoopConfig {
   /// loop.loop_spacing_m: after an accepted loop, keyframes within this much travel are stored but not
   /// searched (a revisit gives one loop every few keyframes, not one at each)
   double loop_spacing_m = 10.0;
+  /// loop.solve_sigmas: an accepted loop that agrees with the current map frame within this many of its
+  /// sigmas (loop_sigma_m, loop_sigma_deg) joins the graph without a solve (finish() solves what is left)
+  double solve_sigmas = 3.0;
 
   /// Reads the `loop` section. The LiDAR's keys are read by their own sections' configs and handed in:
   /// lidar.max_range_m (bounds the descriptor), lidar.range_noise_m and lidar.beam_noise_deg (the
@@ -40,7 +43,8 @@ struct LoopStep {
   int node = -1;        ///< the keyframe's index (graph node, database entry)
   int candidates = 0;   ///< places the search proposed
   int checked = 0;      ///< of them verified
-  bool loop = false;    ///< a loop was accepted and the graph solved
+  bool loop = false;    ///< a loop was accepted
+  bool solved = false;  ///< and the graph solved (it disagreed with the map frame)
   int loop_with = -1;   ///< the keyframe it closed with
   LoopCheck check;      ///< the last verification's result
   PoseGraphReport graph;
@@ -54,6 +58,8 @@ class LoopCloser {
   /// frame's registered points in the odometry frame; the place is searched, candidates verified and, on
   /// a loop, the graph solved.
   LoopStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
+  /// Solves the graph when loops joined it since the last solve (at the end of a run); false otherwise.
+  bool finish();
   /// T_map_odom: the odometry frame in the map frame (identity until a loop is closed).
   const Pose& correction() const { return graph_.correction(); }
   /// A pose of the odometry in the map frame.
@@ -74,6 +80,7 @@ class LoopCloser {
   std::vector<std::vector<Eigen::Vector3f>> points_;  // per keyframe, in its keyframe frame, thinned
   std::size_t points_held_ = 0;
   double last_loop_path_m_ = -1e300;
+  bool unsolved_loops_ = false;
 };
 
 }  // namespace livo
