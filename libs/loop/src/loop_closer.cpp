@@ -11,6 +11,7 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   descriptor.load(loop, lidar_max_range_m);
   search.load(loop, descriptor);
   verify.load(loop, range_noise_m, beam_noise_deg);
+  verify.max_place_offset_m = descriptor.max_range_m;
   graph.load(loop);
   loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
   loop.get("loop_spacing_m", loop_spacing_m).get("solve_sigmas", solve_sigmas);

@@ -128,6 +128,13 @@ LoopCheck LoopVerifier::finish(LoopCheck c) {
 LoopCheck LoopVerifier::verify(const std::vector<Vec3>& cand_points, const std::vector<Vec3>& query_points,
                                double yaw_guess, const Pose& T_odom, double path_between_m) {
   LoopCheck c;
+  const double drift_m = cfg_.drift_base_m + cfg_.drift_fraction * path_between_m;
+  if (T_odom.translation().norm() > drift_m + cfg_.max_place_offset_m) {
+    // The odometry cannot have drifted that far: a look-alike elsewhere (no registration needed).
+    c.odometry_gap_m = T_odom.translation().norm();
+    c.reason = LoopReject::Inconsistent;
+    return finish(c);
+  }
   const std::vector<Vec3> query = thinPoints(query_points, cfg_.downsample_m);
   std::size_t cand_n = 0;
   for (const Vec3& p : cand_points) cand_n += p.allFinite();
@@ -202,7 +209,7 @@ LoopCheck LoopVerifier::verify(const std::vector<Vec3>& cand_points, const std::
   if (!converged) c.reason = LoopReject::NoConvergence;
   else if (c.overlap < cfg_.min_overlap) c.reason = LoopReject::LowOverlap;
   else if (c.rms_m > cfg_.maxRms()) c.reason = LoopReject::HighResidual;
-  else if (c.odometry_gap_m > cfg_.drift_base_m + cfg_.drift_fraction * path_between_m ||
+  else if (c.odometry_gap_m > drift_m ||
            c.odometry_gap_deg > cfg_.drift_yaw_base_deg + cfg_.drift_yaw_deg_per_100m * path_between_m / 100.0)
     c.reason = LoopReject::Inconsistent;
   else c.reason = LoopReject::None;

@@ -12,6 +12,7 @@ namespace livo::sim {
 void WorldConfig::load(const ConfigNode& n) {
   n.get("kind", kind).get("size_m", size_m).get("texture", texture).get("texture_images", texture_images);
   n.get("texture_tile_m", texture_tile_m).get("texture_scale_m", texture_scale_m).get("clutter", clutter);
+  n.get("repeat_m", repeat_m);
 }
 
 void TrajectoryConfig::load(const ConfigNode& n) {
@@ -126,6 +127,8 @@ void SimScenario::validate() const {
   check(world.texture_tile_m > 0.0, "world.texture_tile_m", "must be > 0");
   check(world.texture_scale_m > 0.0, "world.texture_scale_m", "must be > 0");
   check(world.clutter >= 0.0 && world.clutter <= 1.0, "world.clutter", "must be in [0, 1]");
+  check(std::isfinite(world.repeat_m) && (world.repeat_m == 0.0 || world.repeat_m >= 20.0), "world.repeat_m",
+        "must be 0 (no repeat) or at least 20 m");
 
   for (const auto& [key, iv] : {std::make_pair("lidar.dropouts_s", &lidar.dropouts_s),
                                 std::make_pair("camera.dropouts_s", &camera.dropouts_s)}) {

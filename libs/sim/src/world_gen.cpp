@@ -139,9 +139,11 @@ void addCorridor(std::vector<Primitive>& out, const Vec3& s) {
   out.push_back(Primitive::box({0, -0.5 * (W + t), 0.5 * Z}, {L, t, Z}));
 }
 
-// Buildings and street furniture along both sides of the path.
-void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, const std::vector<Vec3>& path,
-               const PathClearance& clear, SplitMix& rng) {
+// Buildings and street furniture along both sides of the path. With `repeat_m` > 0 the layout of the
+// first repeat_m of path repeats along the rest: every block draws the same numbers (identical buildings
+// and furniture wherever the road runs alike), the place-recognition trap of the loop-closure tests.
+void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, double repeat_m,
+               const std::vector<Vec3>& path, const PathClearance& clear, SplitMix& rng) {
   Vec3 lo = Vec3::Constant(1e18), hi = -lo;
   for (const auto& p : path) {
     lo = lo.cwiseMin(p);
@@ -160,14 +162,20 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, const
     const Vec3 d = path[i + 1] - path[i];
     yaw = std::atan2(d.y(), d.x());
   };
+  const double span = repeat_m > 0.0 ? std::min(repeat_m, arc.back()) : arc.back();
+  const int copies = repeat_m > 0.0 ? static_cast<int>(std::ceil(arc.back() / span)) : 1;
   for (int side = -1; side <= 1; side += 2) {
+    const SplitMix side_start = rng;
+    for (int k = 0; k < copies; ++k) {
+    if (repeat_m > 0.0) rng = side_start;  // every block draws what the first drew
+    const double off = k * span;
     // Buildings: frontage 8-30 m, gaps 2-12 m, facade 7-12 m from the path, depth 8-20 m.
-    for (double sq = rng.uniform(0.0, 10.0); sq < arc.back();) {
+    for (double sq = rng.uniform(0.0, 10.0); sq < span && off + sq < arc.back();) {
       const double front = rng.uniform(8.0, 30.0), depth = rng.uniform(8.0, 20.0);
       const double setback = rng.uniform(7.0, 12.0), height = rng.uniform(6.0, std::max(6.5, s.z()));
       Vec3 p;
       double yaw;
-      at(sq + 0.5 * front, p, yaw);
+      at(off + sq + 0.5 * front, p, yaw);
       const double byaw = yaw + rng.uniform(-0.08, 0.08);
       const Vec3 left(-std::sin(yaw), std::cos(yaw), 0.0);
       const Vec3 c = p + side * (setback + 0.5 * depth) * left;
@@ -182,10 +190,10 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, const
     }
     if (clutter <= 0.0) continue;
     // Street furniture: poles, parked cars and trees at the roadside.
-    for (double sq = rng.uniform(0.0, 5.0); sq < arc.back(); sq += rng.uniform(6.0, 18.0) / clutter) {
+    for (double sq = rng.uniform(0.0, 5.0); sq < span && off + sq < arc.back(); sq += rng.uniform(6.0, 18.0) / clutter) {
       Vec3 p;
       double yaw;
-      at(sq, p, yaw);
+      at(off + sq, p, yaw);
       const Vec3 left(-std::sin(yaw), std::cos(yaw), 0.0);
       const int type = rng.integer(0, 2);
       if (type == 0) {
@@ -205,6 +213,7 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, const
           out.push_back(Primitive::box({c.x(), c.y(), 4.4}, {3.0, 3.0, 2.4}, yaw + rng.uniform(0.0, 1.5)));
         }
       }
+    }
     }
   }
 }
@@ -236,7 +245,7 @@ World makeWorld(const SimScenario& sc, const std::vector<Vec3>& path) {
   } else if (w.kind == "corridor") {
     addCorridor(prims, w.size_m);
   } else if (w.kind == "street") {
-    addStreet(prims, w.size_m, w.clutter, path, clear, rng);
+    addStreet(prims, w.size_m, w.clutter, w.repeat_m, path, clear, rng);
   } else {  // wall
     prims.push_back(Primitive::box({w.size_m.x() + 0.25, 0.0, 1.4}, {0.5, w.size_m.y(), w.size_m.z()}));
   }

@@ -30,6 +30,9 @@ struct LoopVerifyConfig {
   double range_sigma_m = 0.02;     ///< lidar.range_noise_m (read by the LiDAR update; handed in)
   double bearing_sigma_deg = 0.1;  ///< lidar.beam_noise_deg (likewise)
   int min_points = 100;            ///< fewer (after thinning) on either side: rejected, too few points
+  /// Two keyframes whose odometry puts them farther apart than this plus the drift bound cannot be one
+  /// place: rejected as inconsistent before any registration (LoopConfig sets the descriptor's range).
+  double max_place_offset_m = 40.0;
 
   /// Reads the verification keys of the `loop` section; the LiDAR's noise comes from its own section.
   void load(const ConfigNode& loop, double range_sigma_m, double bearing_sigma_deg);

@@ -28,6 +28,9 @@ struct WorldConfig {
   double texture_tile_m = 2.0;     ///< images: metres covered by one photo's width
   double texture_scale_m = 1.0;    ///< noise: wavelength of the coarsest octave, metres
   double clutter = 0.5;            ///< 0..1: density of furniture / street furniture
+  /// street: the layout of the first repeat_m metres of road repeats along the rest (identical blocks,
+  /// the place-recognition trap); 0: none
+  double repeat_m = 0.0;
   void load(const ConfigNode& n);
 };
 
