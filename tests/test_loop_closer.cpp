@@ -4,6 +4,7 @@
 // livo-test-deps: livo_sim
 // livo-test-whole
 #include "livo/loop/loop_closer.hpp"
+#include "livo/loop/packed_points.hpp"
 #include "loop_test_util.hpp"
 
 #include <gtest/gtest.h>
@@ -92,8 +93,7 @@ TEST(LoopCloser, PullsADriftedOdometryBackOnTheRevisits) {
               c.too_few_points, c.no_convergence, c.low_overlap, c.high_residual, c.inconsistent, r.points_held);
   // 2026-12-06: 383 keyframes; odometry rms 2.61 m, max 5.70 m -> map frame rms 0.303 m, max 0.432 m (the
   // first lap keeps the drift it had before its end came back to its start); 50 loops (one per
-  // loop_spacing_m of revisit), none false, 12 solves (the other loops agreed with the map frame);
-  // 4.08 M keyframe points held (49 MB).
+  // loop_spacing_m of revisit), none false, 12 solves (the other loops agreed with the map frame).
   EXPECT_EQ(r.false_loops, 0);
   EXPECT_GE(r.loops, 40);
   EXPECT_GT(r.odom_max_m, 5.0);
@@ -101,6 +101,23 @@ TEST(LoopCloser, PullsADriftedOdometryBackOnTheRevisits) {
   EXPECT_LT(r.map_max_m, 0.85);
   EXPECT_EQ(r.checks.accepted, r.loops);
   EXPECT_LT(r.solves, r.loops / 2) << "loops that agree with the map frame wait for the next solve";
+}
+
+TEST(PackedPoints, SixBytesAPointWithinHalfAStepAndTheRangeKept) {
+  const std::vector<Vec3> pts = {Vec3(1.234567, -2.5, 0.004), Vec3(39.99, 0.0, -3.0), Vec3(41.0, 0.0, 0.0),
+                                 Vec3(0.0, 0.0, 45.0), Vec3(NAN, 0.0, 0.0), Vec3(-12.3456, 7.891, 2.0)};
+  const PackedPoints p(pts, 40.0);
+  ASSERT_EQ(p.size(), 3u) << "beyond 40 m (horizontal or vertical) and NaN left out";
+  EXPECT_EQ(p.bytes(), 18u);
+  EXPECT_DOUBLE_EQ(p.step(), 0.01);
+  const std::vector<Vec3> back = p.unpack();
+  const Vec3 kept[3] = {pts[0], pts[1], pts[5]};
+  for (int i = 0; i < 3; ++i) EXPECT_LE((back[std::size_t(i)] - kept[i]).cwiseAbs().maxCoeff(), 0.005 + 1e-12) << i;
+  // A long-range sensor: the step grows so that the range fits in 16 bits.
+  const PackedPoints far({Vec3(300.0, -299.0, 10.0)}, 450.0);
+  ASSERT_EQ(far.size(), 1u);
+  EXPECT_NEAR(far.step(), 450.0 / 32000.0, 1e-15);
+  EXPECT_LE((far.unpack()[0] - Vec3(300.0, -299.0, 10.0)).cwiseAbs().maxCoeff(), 0.5 * far.step() + 1e-12);
 }
 
 // The place-recognition trap: a long, thin block whose street repeats every 60 m (world.repeat_m), one
@@ -118,7 +135,7 @@ TEST(LoopCloser, RepeatedBlocksGiveNoFalseLoop) {
               "overlap, %d high residual, %d not converged, %d inconsistent; error rms %.3f m (odometry) -> %.3f m\n",
               r.keyframes, r.path_m, r.loops, r.false_loops, c.accepted, c.low_overlap, c.high_residual,
               c.no_convergence, c.inconsistent, r.odom_rms_m, r.map_rms_m);
-  // 2026-12-06: 409 keyframes over 974 m, 8 loops (all at the revisit of the start), none false; 646
+  // 2026-12-06: 409 keyframes over 974 m, 8 loops (all at the revisit of the start), none false; 645
   // look-alike candidates rejected as inconsistent with the odometry; error rms 6.77 m -> 0.74 m.
   EXPECT_EQ(r.false_loops, 0);
   EXPECT_GE(r.loops, 4) << "the true revisit of the start";

@@ -58,10 +58,7 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
     Stopwatch check_watch;
     const PlaceEntry& other = places_.entry(c.id);
     const Pose T_odom_rel = keyframeFrame(other.T_world_body).inverse() * K;
-    const auto& stored = points_[static_cast<std::size_t>(c.id)];
-    std::vector<Vec3> cand(stored.size());
-    for (std::size_t i = 0; i < stored.size(); ++i) cand[i] = stored[i].cast<double>();
-    step.check = verifier_.verify(cand, local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
+    step.check = verifier_.verify(points_[static_cast<std::size_t>(c.id)].unpack(), local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
     step.verify_ms += check_watch.elapsedMs();
     if (!step.check.accepted) continue;
     // The loop against the map frame as it stands: where it agrees, the solve can wait.
@@ -85,13 +82,9 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
   }
 
   places_.add(std::move(e));
-  std::vector<Eigen::Vector3f> kept;
-  const double r2 = cfg_.descriptor.max_range_m * cfg_.descriptor.max_range_m;
-  for (const Vec3& p : thinPoints(local, cfg_.keyframe_points_m))
-    if (p.head<2>().squaredNorm() <= r2) kept.push_back(p.cast<float>());
-  kept.shrink_to_fit();
-  points_held_ += kept.size();
-  points_.push_back(std::move(kept));
+  points_.emplace_back(thinPoints(local, cfg_.keyframe_points_m), cfg_.descriptor.max_range_m);
+  points_held_ += points_.back().size();
+  point_bytes_ += points_.back().bytes();
   return step;
 }
 

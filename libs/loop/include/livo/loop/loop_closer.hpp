@@ -6,6 +6,7 @@
 #include "livo/common/config.hpp"
 #include "livo/common/types.hpp"
 #include "livo/loop/loop_verifier.hpp"
+#include "livo/loop/packed_points.hpp"
 #include "livo/loop/place_database.hpp"
 #include "livo/loop/pose_graph.hpp"
 
@@ -21,7 +22,7 @@ struct LoopConfig {
   LoopVerifyConfig verify;
   PoseGraphConfig graph;
   /// loop.keyframe_points_m: a keyframe keeps one point per cube of this edge, within the descriptor's
-  /// range (what verification registers against), in single precision
+  /// range (what verification registers against), packed to 6 bytes a point (packed_points.hpp)
   double keyframe_points_m = 0.25;
   int verify_candidates = 3;        ///< loop.verify_candidates: best candidates checked until one is accepted
   /// loop.loop_spacing_m: after an accepted loop, keyframes within this much travel are stored but not
@@ -68,8 +69,9 @@ class LoopCloser {
   const PlaceDatabase& places() const { return places_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
   int loopsAccepted() const { return graph_.loops(); }
-  /// Keyframe points held (12 bytes each: the stored scans dominate the memory).
+  /// Keyframe points held and their bytes (the stored scans dominate the memory).
   std::size_t pointsHeld() const { return points_held_; }
+  std::size_t pointBytes() const { return point_bytes_; }
 
  private:
   LoopConfig cfg_;
@@ -77,8 +79,8 @@ class LoopCloser {
   PlaceDatabase places_;
   LoopVerifier verifier_;
   PoseGraph graph_;
-  std::vector<std::vector<Eigen::Vector3f>> points_;  // per keyframe, in its keyframe frame, thinned
-  std::size_t points_held_ = 0;
+  std::vector<PackedPoints> points_;  // per keyframe, in its keyframe frame, thinned
+  std::size_t points_held_ = 0, point_bytes_ = 0;
   double last_loop_path_m_ = -1e300;
   bool unsolved_loops_ = false;
 };
