@@ -3,6 +3,7 @@
 // keyframe poses against the truth, before and after the loops.
 // livo-test-deps: livo_sim
 // livo-test-whole
+#include "livo/loop/keyframe_store.hpp"
 #include "livo/loop/loop_closer.hpp"
 #include "livo/loop/packed_points.hpp"
 #include "loop_test_util.hpp"
@@ -11,6 +12,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <stdexcept>
 
 namespace livo {
 namespace {
@@ -19,7 +22,7 @@ struct DriftedRun {
   double odom_max_m = 0.0, odom_rms_m = 0.0, map_max_m = 0.0, map_rms_m = 0.0;
   int keyframes = 0, loops = 0, false_loops = 0, solves = 0;
   LoopCheckCounts checks;
-  std::size_t points_held = 0;
+  std::size_t points_held = 0, spilled_bytes = 0;
   double path_m = 0.0;
 };
 
@@ -73,6 +76,7 @@ DriftedRun runDrifted(const sim::SimScenario& sc, LoopConfig cfg) {
   out.loops = closer.loopsAccepted();
   out.checks = closer.checks();
   out.points_held = closer.pointsHeld();
+  out.spilled_bytes = closer.spilledBytes();
   return out;
 }
 
@@ -101,6 +105,53 @@ TEST(LoopCloser, PullsADriftedOdometryBackOnTheRevisits) {
   EXPECT_LT(r.map_max_m, 0.85);
   EXPECT_EQ(r.checks.accepted, r.loops);
   EXPECT_LT(r.solves, r.loops / 2) << "loops that agree with the map frame wait for the next solve";
+
+  // The same with 2 MB of keyframe points in memory (24 MB held): the rest go to the spill file and come
+  // back unchanged when a candidate needs them.
+  LoopConfig small = defaults(test::revisitScenario());
+  small.points_budget_mb = 2.0;
+  const DriftedRun s = runDrifted(test::revisitScenario(), small);
+  std::printf("with a 2 MB budget: %.1f MB spilled, %d loops, map rms %.6f m\n", s.spilled_bytes / 1e6, s.loops,
+              s.map_rms_m);
+  EXPECT_GT(s.spilled_bytes, 15u * 1000 * 1000);
+  EXPECT_EQ(s.loops, r.loops);
+  EXPECT_EQ(s.map_rms_m, r.map_rms_m);
+  EXPECT_EQ(r.spilled_bytes, 0u) << "128 MB by default: nothing spilled";
+}
+
+TEST(KeyframeStore, SpillsTheOldestBeyondTheBudgetAndReadsThemBack) {
+  std::vector<PackedPoints> orig;
+  for (int k = 0; k < 6; ++k) {
+    std::vector<Vec3> pts;
+    for (int i = 0; i < 10; ++i) pts.emplace_back(0.1 * i + k, -0.2 * i, 0.05 * k);
+    orig.emplace_back(pts, 40.0);
+  }
+  std::string path;
+  {
+    KeyframeStore store(130);  // room for two keyframes of 60 bytes
+    for (const PackedPoints& p : orig) store.add(p);
+    EXPECT_EQ(store.size(), 6u);
+    EXPECT_EQ(store.spilledKeyframes(), 4u);
+    EXPECT_EQ(store.memoryBytes(), 120u);
+    EXPECT_EQ(store.spilledBytes(), 240u);
+    path = store.spillPath();
+    EXPECT_TRUE(std::filesystem::exists(path));
+    for (int k = 5; k >= 0; --k) {  // any order
+      const PackedPoints back = store.get(k);
+      EXPECT_EQ(back.packed(), orig[std::size_t(k)].packed()) << k;
+      EXPECT_EQ(back.step(), orig[std::size_t(k)].step());
+    }
+    EXPECT_THROW(store.get(6), std::out_of_range);
+  }
+  EXPECT_FALSE(std::filesystem::exists(path)) << "the spill file goes with the store";
+  KeyframeStore unlimited;
+  for (const PackedPoints& p : orig) unlimited.add(p);
+  EXPECT_EQ(unlimited.spilledKeyframes(), 0u);
+  EXPECT_TRUE(unlimited.spillPath().empty());
+  // A spill directory that does not exist is a config error.
+  const ConfigFile f = ConfigFile::parse("loop:\n  spill_dir: /nonexistent/livo\n", "rig.yaml");
+  LoopConfig cfg;
+  EXPECT_THROW(cfg.load(f.root().section("loop"), 60.0, 0.02, 0.1), ConfigError);
 }
 
 TEST(PackedPoints, SixBytesAPointWithinHalfAStepAndTheRangeKept) {

@@ -114,6 +114,7 @@ class LoopRun {
     c["loop_graph_solves"] = double(solves_);
     c["loop_points_held"] = double(closer_.pointsHeld());
     c["loop_point_bytes"] = double(closer_.pointBytes());
+    c["loop_point_bytes_spilled"] = double(closer_.spilledBytes());
     c["loop_ms_total"] = ms_;
     c["loop_ms_search"] = search_ms_;
     c["loop_ms_verify"] = verify_ms_;

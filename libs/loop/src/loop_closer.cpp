@@ -3,6 +3,7 @@
 #include "livo/common/timing.hpp"
 
 #include <cmath>
+#include <filesystem>
 
 namespace livo {
 
@@ -15,6 +16,11 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   graph.load(loop);
   loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
   loop.get("loop_spacing_m", loop_spacing_m).get("solve_sigmas", solve_sigmas);
+  loop.get("points_budget_mb", points_budget_mb).get("spill_dir", spill_dir);
+  loop.check(std::isfinite(points_budget_mb) && points_budget_mb >= 0 && points_budget_mb <= 1e6, "points_budget_mb",
+             "must be in [0, 1e6] MB (0: no budget)");
+  loop.check(spill_dir.empty() || std::filesystem::is_directory(spill_dir), "spill_dir",
+             "must be an existing directory, got '" + spill_dir + "'");
   loop.check(std::isfinite(solve_sigmas) && solve_sigmas >= 0, "solve_sigmas", "must be >= 0 (0: solve at every loop)");
   loop.check(std::isfinite(loop_spacing_m) && loop_spacing_m >= 0, "loop_spacing_m", "must be >= 0");
   loop.check(std::isfinite(keyframe_points_m) && keyframe_points_m > 0 && keyframe_points_m <= 10, "keyframe_points_m",
@@ -23,7 +29,12 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
 }
 
 LoopCloser::LoopCloser(LoopConfig cfg)
-    : cfg_(cfg), selector_(cfg_.keyframes), places_(cfg_.search), verifier_(cfg_.verify), graph_(cfg_.graph) {}
+    : cfg_(cfg),
+      selector_(cfg_.keyframes),
+      places_(cfg_.search),
+      verifier_(cfg_.verify),
+      graph_(cfg_.graph),
+      store_(static_cast<std::size_t>(cfg_.points_budget_mb * 1024.0 * 1024.0), cfg_.spill_dir) {}
 
 bool LoopCloser::finish() {
   if (!unsolved_loops_) return false;
@@ -58,7 +69,7 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
     Stopwatch check_watch;
     const PlaceEntry& other = places_.entry(c.id);
     const Pose T_odom_rel = keyframeFrame(other.T_world_body).inverse() * K;
-    step.check = verifier_.verify(points_[static_cast<std::size_t>(c.id)].unpack(), local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
+    step.check = verifier_.verify(store_.get(c.id).unpack(), local, c.match.yaw_rad, T_odom_rel, e.path_m - other.path_m);
     step.verify_ms += check_watch.elapsedMs();
     if (!step.check.accepted) continue;
     // The loop against the map frame as it stands: where it agrees, the solve can wait.
@@ -82,9 +93,9 @@ LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<s
   }
 
   places_.add(std::move(e));
-  points_.emplace_back(thinPoints(local, cfg_.keyframe_points_m), cfg_.descriptor.max_range_m);
-  points_held_ += points_.back().size();
-  point_bytes_ += points_.back().bytes();
+  PackedPoints kept(thinPoints(local, cfg_.keyframe_points_m), cfg_.descriptor.max_range_m);
+  points_held_ += kept.size();
+  store_.add(std::move(kept));
   return step;
 }
 

@@ -6,11 +6,13 @@
 #include "livo/common/config.hpp"
 #include "livo/common/types.hpp"
 #include "livo/loop/loop_verifier.hpp"
+#include "livo/loop/keyframe_store.hpp"
 #include "livo/loop/packed_points.hpp"
 #include "livo/loop/place_database.hpp"
 #include "livo/loop/pose_graph.hpp"
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace livo {
@@ -31,6 +33,10 @@ struct LoopConfig {
   /// loop.solve_sigmas: an accepted loop that agrees with the current map frame within this many of its
   /// sigmas (loop_sigma_m, loop_sigma_deg) joins the graph without a solve (finish() solves what is left)
   double solve_sigmas = 3.0;
+  /// loop.points_budget_mb: keyframe points kept in memory; older keyframes' points go to a spill file
+  /// (read back when a candidate needs them); 0: no budget
+  double points_budget_mb = 128.0;
+  std::string spill_dir;  ///< loop.spill_dir: where the spill file goes ("": the system's temporary directory)
 
   /// Reads the `loop` section. The LiDAR's keys are read by their own sections' configs and handed in:
   /// lidar.max_range_m (bounds the descriptor), lidar.range_noise_m and lidar.beam_noise_deg (the
@@ -69,9 +75,10 @@ class LoopCloser {
   const PlaceDatabase& places() const { return places_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
   int loopsAccepted() const { return graph_.loops(); }
-  /// Keyframe points held and their bytes (the stored scans dominate the memory).
+  /// Keyframe points held (in memory or spilled) and the bytes of those in memory and on disk.
   std::size_t pointsHeld() const { return points_held_; }
-  std::size_t pointBytes() const { return point_bytes_; }
+  std::size_t pointBytes() const { return store_.memoryBytes(); }
+  std::size_t spilledBytes() const { return store_.spilledBytes(); }
 
  private:
   LoopConfig cfg_;
@@ -79,8 +86,8 @@ class LoopCloser {
   PlaceDatabase places_;
   LoopVerifier verifier_;
   PoseGraph graph_;
-  std::vector<PackedPoints> points_;  // per keyframe, in its keyframe frame, thinned
-  std::size_t points_held_ = 0, point_bytes_ = 0;
+  KeyframeStore store_;  // per keyframe, its points in its keyframe frame, thinned
+  std::size_t points_held_ = 0;
   double last_loop_path_m_ = -1e300;
   bool unsolved_loops_ = false;
 };

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace livo {
@@ -17,7 +18,10 @@ class PackedPoints {
   /// Keeps the points within `range_m` horizontally and vertically of the origin (others, and non-finite
   /// ones, are left out).
   PackedPoints(const std::vector<Vec3>& points, double range_m);
+  /// Already packed coordinates (read back from a spill file).
+  PackedPoints(std::vector<std::array<std::int16_t, 3>> packed, double step_m) : step_(step_m), q_(std::move(packed)) {}
   std::vector<Vec3> unpack() const;
+  const std::vector<std::array<std::int16_t, 3>>& packed() const { return q_; }
   std::size_t size() const { return q_.size(); }
   std::size_t bytes() const { return q_.capacity() * sizeof(q_[0]); }
   double step() const { return step_; }
