@@ -1,5 +1,5 @@
-// libs/sim: BVH raycasts vs brute-force raycasts (room and street worlds), and the corridor's degeneracy
-// (no surface along its axis within LiDAR range).
+// libs/sim: BVH raycasts vs brute-force raycasts (room and street worlds), the corridor's degeneracy
+// (no surface along its axis within LiDAR range), world.seed apart from the noise.
 #include "sim_test_util.hpp"
 
 #include "livo/sim/random.hpp"
@@ -64,3 +64,36 @@ TEST(SimWorld, CorridorHasNoSurfaceAlongItsAxisWithinLidarRange) {
   EXPECT_GT(hits, 50000u);
   EXPECT_GE(x_max - x_min, 60.0);  // the walk covers >= 60 m of corridor
 }
+
+namespace livo::sim {
+namespace {
+
+// world.seed keeps the world while the scenario's seed changes the noise; unset, the world follows the
+// scenario's seed as before.
+TEST(SimWorld, WorldSeedKeepsTheWorldApartFromTheNoise) {
+  auto world = [](std::int64_t seed, std::int64_t world_seed) {
+    SimScenario s = test::makeScenario("street", "avia", true);
+    s.seed = seed;
+    s.world.seed = world_seed;
+    return Simulator(s);
+  };
+  auto same = [](const World& a, const World& b) {
+    if (a.primitives().size() != b.primitives().size()) return false;
+    for (std::size_t i = 0; i < a.primitives().size(); ++i)
+      if (a.primitives()[i].center != b.primitives()[i].center || a.primitives()[i].half != b.primitives()[i].half)
+        return false;
+    return true;
+  };
+  const Simulator a = world(1, 7), b = world(2, 7), c = world(1, -1), d = world(2, -1);
+  EXPECT_TRUE(same(a.world(), b.world()));
+  EXPECT_FALSE(same(c.world(), d.world()));
+  // The same world seen with other noise: the scans differ (ranges, and so which beams hit).
+  const LidarScan sa = a.lidarScan(10), sb = b.lidarScan(10);
+  bool differ = sa.points.size() != sb.points.size();
+  for (std::size_t i = 0; !differ && i < sa.points.size(); ++i) differ = sa.points[i].p_lidar != sb.points[i].p_lidar;
+  EXPECT_TRUE(differ) << "other sensor noise";
+  EXPECT_NEAR(double(sa.points.size()), double(sb.points.size()), 0.01 * double(sa.points.size())) << "one world";
+}
+
+}  // namespace
+}  // namespace livo::sim

@@ -12,7 +12,7 @@ namespace livo::sim {
 void WorldConfig::load(const ConfigNode& n) {
   n.get("kind", kind).get("size_m", size_m).get("texture", texture).get("texture_images", texture_images);
   n.get("texture_tile_m", texture_tile_m).get("texture_scale_m", texture_scale_m).get("clutter", clutter);
-  n.get("repeat_m", repeat_m);
+  n.get("repeat_m", repeat_m).get("seed", seed);
 }
 
 void TrajectoryConfig::load(const ConfigNode& n) {
@@ -127,6 +127,7 @@ void SimScenario::validate() const {
   check(world.texture_tile_m > 0.0, "world.texture_tile_m", "must be > 0");
   check(world.texture_scale_m > 0.0, "world.texture_scale_m", "must be > 0");
   check(world.clutter >= 0.0 && world.clutter <= 1.0, "world.clutter", "must be in [0, 1]");
+  check(world.seed >= -1, "world.seed", "must be >= 0 (or -1: the scenario's seed)");
   check(std::isfinite(world.repeat_m) && (world.repeat_m == 0.0 || world.repeat_m >= 20.0), "world.repeat_m",
         "must be 0 (no repeat) or at least 20 m");
 

@@ -235,7 +235,7 @@ std::vector<std::string> resolveTexturePaths(const SimScenario& sc) {
 
 World makeWorld(const SimScenario& sc, const std::vector<Vec3>& path) {
   const WorldConfig& w = sc.world;
-  const auto seed = static_cast<std::uint64_t>(sc.seed);
+  const auto seed = static_cast<std::uint64_t>(w.seed >= 0 ? w.seed : sc.seed);  // world.seed: layout apart from noise
   SplitMix rng(hashKeys(seed, static_cast<std::uint64_t>(RngStream::World), 0));
   const PathClearance clear(path);
   std::vector<Primitive> prims;

@@ -31,6 +31,9 @@ struct WorldConfig {
   /// street: the layout of the first repeat_m metres of road repeats along the rest (identical blocks,
   /// the place-recognition trap); 0: none
   double repeat_m = 0.0;
+  /// Seed of the world's layout and texture, apart from the sensor noise: two scenarios with one
+  /// world.seed and different `seed`s drive through the same world with other noise. -1: the scenario's seed.
+  std::int64_t seed = -1;
   void load(const ConfigNode& n);
 };
 
