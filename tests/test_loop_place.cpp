@@ -35,12 +35,9 @@ TEST(PlaceDescriptor, ATurnAboutZIsFoundAsTheYawAndLeavesTheRingKey) {
   const PlaceDescriptorConfig cfg;
   // The scan in the keyframe's frame, then the same scan seen by a sensor turned by -yaw (its points
   // turned by +yaw): the descriptor must report +yaw (p_query = Rz(yaw) p_candidate).
-  const PlaceDescriptor ref = PlaceDescriptor::computeAt(worldScan(s, j), T, cfg);
-  std::vector<Vec3> local;
-  {
-    const Eigen::AngleAxisd Rinv(-yawOf(T), Vec3::UnitZ());
-    for (const Vec3& p : worldScan(s, j)) local.push_back(Rinv * (p - T.translation()));
-  }
+  const std::vector<Vec3> world = worldScan(s, j);
+  const PlaceDescriptor ref = PlaceDescriptor::computeAt(world, T, cfg);
+  const std::vector<Vec3> local = test::inKeyframe(world, T);
   ASSERT_GT(ref.occupiedSectors(), cfg.sectors * 3 / 4);
   const double sector = 2.0 * M_PI / cfg.sectors;
   for (const double yaw_deg : {0.0, 30.0, -90.0, 137.0, 181.0, -44.5, 3.0}) {

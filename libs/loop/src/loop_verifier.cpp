@@ -49,14 +49,6 @@ const char* toString(LoopReject r) {
   return "?";
 }
 
-Pose keyframeFrame(const Pose& T_world_body) {
-  const Mat3 R = T_world_body.linear();
-  Pose K = Pose::Identity();
-  K.linear() = Eigen::AngleAxisd(std::atan2(R(1, 0), R(0, 0)), Vec3::UnitZ()).toRotationMatrix();
-  K.translation() = T_world_body.translation();
-  return K;
-}
-
 std::vector<Vec3> thinPoints(const std::vector<Vec3>& points, double voxel_m) {
   std::unordered_set<VoxelKey, VoxelKeyHash> seen;
   std::vector<Vec3> out;

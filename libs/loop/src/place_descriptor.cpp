@@ -26,17 +26,19 @@ double yawOf(const Pose& T_world_body) {
   return std::atan2(R(1, 0), R(0, 0));
 }
 
+Pose keyframeFrame(const Pose& T_world_body) {
+  Pose K = Pose::Identity();
+  K.linear() = Eigen::AngleAxisd(yawOf(T_world_body), Vec3::UnitZ()).toRotationMatrix();
+  K.translation() = T_world_body.translation();
+  return K;
+}
+
 PlaceDescriptor PlaceDescriptor::computeAt(const std::vector<Vec3>& world_points, const Pose& T_world_body,
                                            const PlaceDescriptorConfig& cfg) {
-  const double yaw = yawOf(T_world_body);
-  const double c = std::cos(yaw), s = std::sin(yaw);
-  const Vec3 o = T_world_body.translation();
+  const Pose K_inv = keyframeFrame(T_world_body).inverse();
   std::vector<Vec3> local;
   local.reserve(world_points.size());
-  for (const Vec3& p : world_points) {
-    const Vec3 d = p - o;
-    local.emplace_back(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), d.z());
-  }
+  for (const Vec3& p : world_points) local.push_back(K_inv * p);
   return compute(local, cfg);
 }
 

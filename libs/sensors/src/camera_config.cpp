@@ -4,18 +4,14 @@
 
 namespace livo {
 
-void CameraConfig::load(const ConfigNode& root) { loadSection(root, nullptr); }
-void CameraConfig::load(const ConfigNode& root, bool camera_enabled) { loadSection(root, &camera_enabled); }
-
-void CameraConfig::loadSection(const ConfigNode& root, const bool* camera_enabled) {
+void CameraConfig::load(const ConfigNode& root, std::optional<bool> camera_enabled) {
   if (!root.has("camera")) {
     enabled = false;
     return;
   }
   const ConfigNode n = root.section("camera");
-  enabled = true;
-  if (camera_enabled != nullptr) enabled = *camera_enabled;
-  else n.get("enabled", enabled);
+  enabled = camera_enabled.value_or(true);
+  if (!camera_enabled) n.get("enabled", enabled);
   readMode(n, "model", model);
   n.get("scale", scale).get("pixel_noise", pixel_noise).get("distortion", distortion);
   n.get("vignetting", vignetting);

@@ -164,11 +164,8 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, doubl
   };
   const double span = repeat_m > 0.0 ? std::min(repeat_m, arc.back()) : arc.back();
   const int copies = repeat_m > 0.0 ? static_cast<int>(std::ceil(arc.back() / span)) : 1;
-  for (int side = -1; side <= 1; side += 2) {
-    const SplitMix side_start = rng;
-    for (int k = 0; k < copies; ++k) {
-    if (repeat_m > 0.0) rng = side_start;  // every block draws what the first drew
-    const double off = k * span;
+  // One side's buildings and furniture along the road from arc length `off`, at most `span` long.
+  const auto addBlock = [&](int side, double off) {
     // Buildings: frontage 8-30 m, gaps 2-12 m, facade 7-12 m from the path, depth 8-20 m.
     for (double sq = rng.uniform(0.0, 10.0); sq < span && off + sq < arc.back();) {
       const double front = rng.uniform(8.0, 30.0), depth = rng.uniform(8.0, 20.0);
@@ -188,7 +185,7 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, doubl
       }
       sq += front + rng.uniform(2.0, 12.0);
     }
-    if (clutter <= 0.0) continue;
+    if (clutter <= 0.0) return;
     // Street furniture: poles, parked cars and trees at the roadside.
     for (double sq = rng.uniform(0.0, 5.0); sq < span && off + sq < arc.back(); sq += rng.uniform(6.0, 18.0) / clutter) {
       Vec3 p;
@@ -214,6 +211,12 @@ void addStreet(std::vector<Primitive>& out, const Vec3& s, double clutter, doubl
         }
       }
     }
+  };
+  for (int side = -1; side <= 1; side += 2) {
+    const SplitMix side_start = rng;
+    for (int k = 0; k < copies; ++k) {
+      if (repeat_m > 0.0) rng = side_start;  // every block draws what the first drew
+      addBlock(side, k * span);
     }
   }
 }

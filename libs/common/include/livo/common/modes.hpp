@@ -47,9 +47,8 @@ void readMode(const ConfigNode& n, const std::string& key, Mode& out) {
 /// The same for a key that must be present (ConfigError naming it when missing).
 template <class Mode>
 void requireMode(const ConfigNode& n, const std::string& key, Mode& out) {
-  std::string s;
-  n.require(key, s);
-  n.check(parseMode(s, out), key, "must be " + modeNames<Mode>() + ", got '" + s + "'");
+  if (!n.has(key)) n.fail(key, "required key is missing");
+  readMode(n, key, out);
 }
 
 inline VisualMode parseVisualMode(const std::string& s) { return parseMode<VisualMode>(s); }

@@ -69,8 +69,6 @@ class LoopCloser {
   bool finish();
   /// T_map_odom: the odometry frame in the map frame (identity until a loop is closed).
   const Pose& correction() const { return graph_.correction(); }
-  /// A pose of the odometry in the map frame.
-  Pose toMap(const Pose& T_odom_body) const { return graph_.correction() * T_odom_body; }
   const PoseGraph& graph() const { return graph_; }
   const PlaceDatabase& places() const { return places_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }

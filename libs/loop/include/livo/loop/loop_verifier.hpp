@@ -8,6 +8,7 @@
 
 #include "livo/common/config.hpp"
 #include "livo/common/so3.hpp"
+#include "livo/loop/place_descriptor.hpp"
 
 #include <vector>
 
@@ -70,7 +71,6 @@ class LoopVerifier {
   LoopCheck verify(const std::vector<Vec3>& cand_points, const std::vector<Vec3>& query_points, double yaw_guess,
                    const Pose& T_odom_cand_query, double path_between_m);
   const LoopCheckCounts& counts() const { return counts_; }
-  const LoopVerifyConfig& config() const { return cfg_; }
 
  private:
   LoopVerifyConfig cfg_;
@@ -78,8 +78,6 @@ class LoopVerifier {
   LoopCheck finish(LoopCheck c);
 };
 
-/// The keyframe frame of a body pose: the pose's position and heading (yaw), no roll or pitch.
-Pose keyframeFrame(const Pose& T_world_body);
 /// Thins `points` to the first of each cube of edge `voxel_m` (in input order).
 std::vector<Vec3> thinPoints(const std::vector<Vec3>& points, double voxel_m);
 

@@ -1,5 +1,5 @@
 // Keyframes and the search over them: a keyframe every few metres or degrees of the odometry, stored with
-// its pose, covariance and place descriptor; a query returns the stored keyframes that look like the
+// its pose, the path travelled and its place descriptor; a query returns the stored keyframes that look like the
 // current place, each with the yaw between them, for geometric verification. docs/algorithms.md,
 // "Place recognition".
 #pragma once
@@ -50,7 +50,6 @@ struct PlaceEntry {
   Utime utime = 0;
   double path_m = 0.0;  ///< KeyframeSelector::pathLength() when stored
   Pose T_world_body = Pose::Identity();
-  Mat6 covariance = Mat6::Identity();  ///< the filter's pose covariance (rotation, position)
   PlaceDescriptor descriptor;
 };
 
@@ -71,7 +70,6 @@ class PlaceDatabase {
   std::vector<PlaceCandidate> search(const PlaceDescriptor& query, double path_m) const;
   const PlaceEntry& entry(int id) const { return entries_.at(static_cast<std::size_t>(id)); }
   std::size_t size() const { return entries_.size(); }
-  const PlaceSearchConfig& config() const { return cfg_; }
 
  private:
   PlaceSearchConfig cfg_;

@@ -40,8 +40,8 @@ class PlaceDescriptor {
   PlaceDescriptor() = default;
   /// Bins `points` (in the keyframe's gravity-aligned frame, see above).
   static PlaceDescriptor compute(const std::vector<Vec3>& points, const PlaceDescriptorConfig& cfg);
-  /// The same from points in the odometry frame seen from `T_world_body`: the body's yaw and position
-  /// define the keyframe frame (roll and pitch are not removed: the filter's frame is gravity-aligned).
+  /// The same from points in the odometry frame seen from `T_world_body` (in keyframeFrame(T_world_body):
+  /// roll and pitch are not removed, the filter's frame is gravity-aligned).
   static PlaceDescriptor computeAt(const std::vector<Vec3>& world_points, const Pose& T_world_body,
                                    const PlaceDescriptorConfig& cfg);
 
@@ -50,8 +50,6 @@ class PlaceDescriptor {
   bool empty() const { return cells_.empty(); }
   /// Scaled height of cell (ring, sector), 0 when the cell holds no point.
   float cell(int ring, int sector) const { return cells_[static_cast<std::size_t>(ring * sectors_ + sector)]; }
-  /// Per ring, the mean of its cells: invariant under a turn about z.
-  const std::vector<float>& ringKey() const { return ring_key_; }
   /// Sectors holding at least one point.
   int occupiedSectors() const;
 
@@ -66,12 +64,14 @@ class PlaceDescriptor {
   int sectors_ = 0;
   std::vector<float> cells_;     // ring-major
   std::vector<float> col_norm_;  // per sector, the norm of its column (0: empty)
-  std::vector<float> ring_key_;
+  std::vector<float> ring_key_;  // per ring, the mean of its cells: invariant under a turn about z
 
   double distanceAtShift(const PlaceDescriptor& candidate, int shift, int* compared) const;
 };
 
 /// The yaw of a pose's x axis about the world z axis, radians in (-pi, pi].
 double yawOf(const Pose& T_world_body);
+/// The keyframe frame of a body pose: the pose's position and heading (yawOf), no roll or pitch.
+Pose keyframeFrame(const Pose& T_world_body);
 
 }  // namespace livo

@@ -58,7 +58,6 @@ class PoseGraph {
   /// T_map_odom: mapPose(last) * odometryPose(last)^-1 as of the last solve that moved the poses
   /// (identity before); keyframes added since are placed with it.
   const Pose& correction() const { return correction_; }
-  const std::vector<PoseGraphEdge>& edges() const { return edges_; }
   int loops() const { return loops_; }
 
  private:

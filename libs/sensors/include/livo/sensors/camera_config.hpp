@@ -5,6 +5,7 @@
 #include "livo/common/modes.hpp"
 #include "livo/common/so3.hpp"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,14 +28,10 @@ struct CameraConfig {
   double time_offset_sigma_s = 0.005;
 
   /// Reads the `camera` section of a rig config; keys owned by the preprocessing (time_offset_s) are
-  /// read there. Throws ConfigError naming the key when a required one is missing or invalid.
-  void load(const ConfigNode& root);
-  /// The same with camera.enabled taken from `enabled` (read by PreprocessConfig, which the pipeline
-  /// loads first): not read again.
-  void load(const ConfigNode& root, bool enabled);
-
- private:
-  void loadSection(const ConfigNode& root, const bool* enabled);
+  /// read there. `camera_enabled`: camera.enabled as the preprocessing's config read it (the pipeline
+  /// loads that first), not read again; absent, it is read here. Throws ConfigError naming the key when
+  /// a required one is missing or invalid.
+  void load(const ConfigNode& root, std::optional<bool> camera_enabled = std::nullopt);
 };
 
 }  // namespace livo
