@@ -61,8 +61,8 @@ class MapBytes {
 
 /// --loop: every posed frame goes to the LoopCloser (its registered points on keyframes); at the end
 /// trajectory_map.tum holds every frame in the map frame of the final graph (the frame's odometry pose
-/// carried by the correction of the last keyframe at or before it) and the loop_* counters go into
-/// stats.json.
+/// carried by the last keyframe at or before it: MapFrameTrajectory, as livo-exporter does with the
+/// livo-loop process's corrections) and the loop_* counters go into stats.json.
 class LoopRun {
  public:
   explicit LoopRun(const LoopConfig& cfg) : closer_(cfg) {}
@@ -70,77 +70,34 @@ class LoopRun {
   void add(const Frame& frame, const FrameResult& r) {
     if (!r.lio.initialized) return;
     const Pose T = r.lio.state.pose();
-    Stopwatch watch;
-    const LoopStep st = closer_.add(frame.utime, T, [&] {
+    closer_.add(frame.utime, T, [&] {
       std::vector<Vec3> world;
       world.reserve(r.lio.points.size());
       for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
       return world;
     });
-    ms_ += watch.elapsedMs();
-    search_ms_ += st.search_ms;
-    verify_ms_ += st.verify_ms;
-    graph_ms_ += st.graph_ms;
-    if (st.keyframe) last_key_ = st.node;
-    candidates_ += st.candidates;
-    solves_ += st.solved;
-    frames_.push_back({frame.utime, T, last_key_});
+    frames_.push_back({frame.utime, T});
   }
 
   void write(const std::string& dir) {
-    Stopwatch watch;
-    if (closer_.finish()) ++solves_;
-    graph_ms_ += watch.elapsedMs();
-    ms_ += watch.elapsedMs();
+    closer_.finish();
+    MapFrameTrajectory map;
+    map.apply(closer_.correctionMessage(/*all=*/true, /*final=*/true));
     TumWriter tum(dir + "/trajectory_map.tum");
-    const PoseGraph& g = closer_.graph();
-    for (const FramePose& f : frames_) {
-      if (f.key < 0) continue;
-      tum.write(toSeconds(f.utime), g.mapPose(f.key) * g.odometryPose(f.key).inverse() * f.T_odom);
-    }
+    for (const FramePose& f : frames_)
+      if (const auto T_map = map.toMap(f.utime, f.T_odom)) tum.write(toSeconds(f.utime), *T_map);
   }
 
-  void addCounters(Counters& c) const {
-    const LoopCheckCounts& n = closer_.checks();
-    c["loop_keyframes"] = double(closer_.graph().size());
-    c["loop_candidates"] = double(candidates_);
-    c["loop_checks"] = double(n.total());
-    c["loop_accepted"] = double(n.accepted);
-    c["loop_rejected_too_few_points"] = double(n.too_few_points);
-    c["loop_rejected_no_convergence"] = double(n.no_convergence);
-    c["loop_rejected_low_overlap"] = double(n.low_overlap);
-    c["loop_rejected_high_residual"] = double(n.high_residual);
-    c["loop_rejected_inconsistent"] = double(n.inconsistent);
-    c["loop_graph_solves"] = double(solves_);
-    c["loop_points_held"] = double(closer_.pointsHeld());
-    c["loop_point_bytes"] = double(closer_.pointBytes());
-    c["loop_point_bytes_spilled"] = double(closer_.spilledBytes());
-    c["loop_ms_total"] = ms_;
-    c["loop_ms_search"] = search_ms_;
-    c["loop_ms_verify"] = verify_ms_;
-    c["loop_ms_graph"] = graph_ms_;
-  }
-
-  std::string summary() const {
-    const LoopCheckCounts& n = closer_.checks();
-    char buf[256];
-    std::snprintf(buf, sizeof buf,
-                  "loop closure: %zu keyframes, %d candidates, %d checked, %d loops accepted; %.0f ms in all; "
-                  "trajectory_map.tum\n",
-                  closer_.graph().size(), candidates_, n.total(), n.accepted, ms_);
-    return buf;
-  }
+  void addCounters(Counters& c) const { closer_.addCounters(c); }
+  std::string summary() const { return "loop closure: " + closer_.summary() + "; trajectory_map.tum\n"; }
 
  private:
   struct FramePose {
     Utime utime;
     Pose T_odom;
-    int key;
   };
   LoopCloser closer_;
   std::vector<FramePose> frames_;
-  int last_key_ = -1, candidates_ = 0, solves_ = 0;
-  double ms_ = 0.0, search_ms_ = 0.0, verify_ms_ = 0.0, graph_ms_ = 0.0;
 };
 
 /// What happens with each frame result: its points into map.pcd (camera gray where an image saw the

@@ -5,6 +5,7 @@
 #include "livo/io/channels.hpp"
 #include "livo/io/convert.hpp"
 #include "livo/io/estimator_messages.hpp"
+#include "livo/io/loop_messages.hpp"
 #include "livo/io/map_messages.hpp"
 #include "livo/io/resume_messages.hpp"
 #include "livo/map/map_file.hpp"
@@ -67,7 +68,7 @@ Validation plainFrom(const Msg& m, T& o, const MessageLimits& l) {
   return fromMsg(m, o, l);
 }
 
-constexpr int kTypes = 16;
+constexpr int kTypes = 17;
 
 std::vector<std::uint8_t> tagged(int type, const std::vector<std::uint8_t>& bytes) {
   std::vector<std::uint8_t> out{std::uint8_t(type)};
@@ -131,6 +132,7 @@ int fuzzMessages(const std::uint8_t* data, std::size_t size) {
     case 12: roundTrip<livo::plane_t, SubmapPlane>(d, n, "plane_t", plainFrom); break;
     case 14: roundTrip<livo::filter_state_t, FilterSnapshot>(d, n, "filter_state_t", stateFrom); break;
     case 15: roundTrip<livo::resume_t, ResumeAnswer>(d, n, "resume_t", plainFrom); break;
+    case 16: roundTrip<livo::map_correction_t, MapCorrection>(d, n, "map_correction_t", plainFrom); break;
     default: roundTrip<livo::visual_point_t, VisualPoint>(d, n, "visual_point_t", plainFrom); break;
   }
   return 0;
@@ -257,6 +259,16 @@ std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seeds(const std::
     ra.imu = {imu};
     ra.imu[0].utime = 8005;
     out.push_back({"resume", tagged(15, encode(toMsg(ra)))});
+    MapCorrection mc;
+    mc.utime = 9000;
+    mc.keyframes_total = 3;
+    mc.first = 1;
+    mc.keyframes = {{8000, Pose::Identity(), Pose::Identity()}, {9000, Pose::Identity(), Pose::Identity()}};
+    mc.keyframes[1].T_odom.translation() = Vec3(2, 0, 0);
+    mc.keyframes[1].T_map.translation() = Vec3(1.9, 0.1, 0);
+    mc.loops = {{0, 2}};
+    mc.solves = 1;
+    out.push_back({"map_correction", tagged(16, encode(toMsg(mc)))});
   } else if (target == "config") {
     for (const char* name : {"avia.yaml", "sim_demo.yaml", "mid360.yaml"}) {
       std::ifstream f(std::string(LIVO_SOURCE_DIR) + "/config/" + name, std::ios::binary);

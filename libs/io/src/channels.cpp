@@ -10,9 +10,10 @@ void ChannelConfig::load(const ConfigNode& n) {
   n.get("odometry", odometry).get("registered_scan", registered_scan);
   n.get("estimator_stats", estimator_stats).get("map_stats", map_stats);
   n.get("filter_state", filter_state).get("resume_request", resume_request).get("resume", resume);
+  n.get("map_correction", map_correction);
   for (const std::string* c : {&imu, &lidar, &camera, &frame, &map_query, &submap, &map_update, &odometry,
                                &registered_scan, &estimator_stats, &map_stats, &filter_state, &resume_request,
-                               &resume})
+                               &resume, &map_correction})
     n.check(!c->empty() && c->size() < 256, "channels", "channel names must be 1..255 characters");
 }
 

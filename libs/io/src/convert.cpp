@@ -4,6 +4,7 @@
 #include <livo/filter_state_t.hpp>
 #include <livo/resume_request_t.hpp>
 #include <livo/resume_t.hpp>
+#include <livo/map_correction_t.hpp>
 #include <livo/map_query_t.hpp>
 #include <livo/map_stats_t.hpp>
 #include <livo/map_update_t.hpp>
@@ -281,5 +282,6 @@ template Validation decode(const void*, std::size_t, livo::map_stats_t&, const M
 template Validation decode(const void*, std::size_t, livo::filter_state_t&, const MessageLimits&);
 template Validation decode(const void*, std::size_t, livo::resume_request_t&, const MessageLimits&);
 template Validation decode(const void*, std::size_t, livo::resume_t&, const MessageLimits&);
+template Validation decode(const void*, std::size_t, livo::map_correction_t&, const MessageLimits&);
 
 }  // namespace livo

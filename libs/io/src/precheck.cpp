@@ -5,6 +5,7 @@
 
 #include <livo/estimator_stats_t.hpp>
 #include <livo/filter_state_t.hpp>
+#include <livo/map_correction_t.hpp>
 #include <livo/map_query_t.hpp>
 #include <livo/map_stats_t.hpp>
 #include <livo/map_update_t.hpp>
@@ -186,6 +187,17 @@ bool walkResume(Walker& w, const std::string& f) {
          w.skip(8, f + ".imu_dropped") && w.string(f + ".config_mismatch");
 }
 
+bool walkCorrection(Walker& w, const std::string& f) {
+  std::int32_t n = 0, nl = 0;
+  // utime, position[3], orientation[4], keyframes_total, solves, final, first_keyframe; num_keyframes;
+  // keyframe_utime, odom_pose[7], map_pose[7]; num_loops; loop_from, loop_to
+  constexpr std::size_t kKeyframe = 8 + 56 + 56;
+  return w.skip(8 + 24 + 32 + 4 + 4 + 1 + 4, f + ".header") &&
+         w.count(f + ".num_keyframes", w.lim().max_keyframes, kKeyframe, n) &&
+         w.skip(std::size_t(n) * kKeyframe, f + ".keyframes") && w.count(f + ".num_loops", w.lim().max_keyframes, 8, nl) &&
+         w.skip(std::size_t(nl) * 8, f + ".loops");
+}
+
 template <class Msg, class WalkFn>
 Validation run(const void* data, std::size_t size, const MessageLimits& lim, WalkFn walk) {
   const std::string type = Msg::getTypeName();
@@ -229,6 +241,7 @@ LIVO_PRECHECK(livo::map_stats_t, walkMapStats)
 LIVO_PRECHECK(livo::filter_state_t, walkFilterState)
 LIVO_PRECHECK(livo::resume_request_t, walkResumeRequest)
 LIVO_PRECHECK(livo::resume_t, walkResume)
+LIVO_PRECHECK(livo::map_correction_t, walkCorrection)
 #undef LIVO_PRECHECK
 
 }  // namespace livo

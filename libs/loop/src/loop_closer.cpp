@@ -2,7 +2,9 @@
 
 #include "livo/common/timing.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 namespace livo {
@@ -37,12 +39,75 @@ LoopCloser::LoopCloser(LoopConfig cfg)
       store_(static_cast<std::size_t>(cfg_.points_budget_mb * 1024.0 * 1024.0), cfg_.spill_dir) {}
 
 bool LoopCloser::finish() {
+  solved_last_ = false;
   if (!unsolved_loops_) return false;
   unsolved_loops_ = false;
-  return graph_.optimize().solved;
+  Stopwatch watch;
+  solved_last_ = graph_.optimize().solved;
+  totals_.graph_ms += watch.elapsedMs();
+  totals_.ms += watch.elapsedMs();
+  totals_.solves += solved_last_;
+  return solved_last_;
+}
+
+MapCorrection LoopCloser::correctionMessage(bool all, bool final) const {
+  MapCorrection c;
+  const int n = static_cast<int>(graph_.size());
+  c.T_map_odom = graph_.correction();
+  c.keyframes_total = n;
+  c.first = (all || solved_last_) ? 0 : std::max(0, n - 1);
+  for (int i = c.first; i < n; ++i)
+    c.keyframes.push_back(KeyframePose{places_.entry(i).utime, graph_.odometryPose(i), graph_.mapPose(i)});
+  c.utime = n > 0 ? places_.entry(n - 1).utime : 0;
+  c.loops = loop_edges_;
+  c.solves = totals_.solves;
+  c.final = final;
+  return c;
+}
+
+void LoopCloser::addCounters(std::map<std::string, double>& c) const {
+  const LoopCheckCounts& n = checks();
+  c["loop_keyframes"] = double(graph_.size());
+  c["loop_candidates"] = double(totals_.candidates);
+  c["loop_checks"] = double(n.total());
+  c["loop_accepted"] = double(n.accepted);
+  c["loop_rejected_too_few_points"] = double(n.too_few_points);
+  c["loop_rejected_no_convergence"] = double(n.no_convergence);
+  c["loop_rejected_low_overlap"] = double(n.low_overlap);
+  c["loop_rejected_high_residual"] = double(n.high_residual);
+  c["loop_rejected_inconsistent"] = double(n.inconsistent);
+  c["loop_graph_solves"] = double(totals_.solves);
+  c["loop_points_held"] = double(points_held_);
+  c["loop_point_bytes"] = double(store_.memoryBytes());
+  c["loop_point_bytes_spilled"] = double(store_.spilledBytes());
+  c["loop_ms_total"] = totals_.ms;
+  c["loop_ms_search"] = totals_.search_ms;
+  c["loop_ms_verify"] = totals_.verify_ms;
+  c["loop_ms_graph"] = totals_.graph_ms;
+}
+
+std::string LoopCloser::summary() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "%zu keyframes, %d candidates, %d checked, %d loops accepted, %d solves; %.0f ms in all",
+                graph_.size(), totals_.candidates, checks().total(), checks().accepted, totals_.solves, totals_.ms);
+  return buf;
 }
 
 LoopStep LoopCloser::add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
+  Stopwatch total_watch;
+  const LoopStep step = addKeyframe(t, T_odom_body, scan);
+  totals_.ms += total_watch.elapsedMs();
+  totals_.search_ms += step.search_ms;
+  totals_.verify_ms += step.verify_ms;
+  totals_.graph_ms += step.graph_ms;
+  totals_.candidates += step.candidates;
+  totals_.solves += step.solved;
+  if (step.keyframe) solved_last_ = step.solved;
+  if (step.loop) loop_edges_.emplace_back(step.loop_with, step.node);
+  return step;
+}
+
+LoopStep LoopCloser::addKeyframe(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
   LoopStep step;
   if (!selector_.offer(T_odom_body)) return step;
   step.keyframe = true;

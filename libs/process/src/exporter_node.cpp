@@ -1,6 +1,7 @@
 #include "livo/process/exporter_node.hpp"
 
 #include "livo/common/timing.hpp"
+#include "livo/eval/tum.hpp"
 #include "livo/io/frame_row.hpp"
 
 #include <iomanip>
@@ -18,6 +19,8 @@ ExporterNode::ExporterNode(LcmNode& lcm, const ChannelConfig& channels, const Ma
   lcm_.subscribeStruct<livo::registered_scan_t, RegisteredScan>(channels_.registered_scan,
                                                                  [this](RegisteredScan& s) { onRegisteredScan(s); });
   lcm_.subscribeStruct<livo::map_stats_t, MapStats>(channels_.map_stats, [this](MapStats& m) { onMapStats(m); });
+  lcm_.subscribeStruct<livo::map_correction_t, MapCorrection>(channels_.map_correction,
+                                                               [this](MapCorrection& c) { onMapCorrection(c); });
   if (outputs_.previousPoses() > 0 && log_)
     *log_ << "livo-exporter: continuing " << out_dir << "/trajectory.tum (" << outputs_.previousPoses()
           << " poses, the last at t " << std::fixed << std::setprecision(6) << outputs_.lastPoseTime()
@@ -87,6 +90,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
     counters_["frames_without_stats"] += 1;
   }
   outputs_.addFrame(rec);  // flushed per line
+  if (rec.has_pose) odometry_poses_.emplace_back(t, rec.T_world_imu);
   health_.addFrame(t, rec.has_pose, rec.lidar_failed, rec.visual_used, rec.degenerate);
   wrote_any_ = true;
   last_written_ = t;
@@ -143,11 +147,36 @@ void ExporterNode::onMapStats(const MapStats& m) {
   counters_["map_stats_messages"] += 1;
 }
 
+void ExporterNode::onMapCorrection(const MapCorrection& c) {
+  map_corrections_ = true;
+  counters_["map_corrections"] += 1;
+  const std::string why = map_frame_.apply(c);
+  if (why.empty()) return;
+  const double n = counters_["map_corrections_refused"] += 1;
+  if (log_ && shouldWarn(std::uint64_t(n))) *log_ << "livo-exporter: map correction refused: " << why << "\n";
+}
+
 void ExporterNode::finish() {
   if (finished_) return;
   finished_ = true;
   flushFrames(true);
   insertHeldScans(true);
+
+  if (map_corrections_) {
+    TumWriter tum(outputs_.dir() + "/trajectory_map.tum");
+    std::size_t written = 0;
+    for (const auto& [t, T_odom] : odometry_poses_)
+      if (const auto T_map = map_frame_.toMap(t, T_odom)) {
+        tum.write(toSeconds(t), *T_map);
+        ++written;
+      }
+    counters_["map_frame_poses"] = double(written);
+    counters_["map_frame_keyframes"] = double(map_frame_.known());
+    counters_["map_frame_final"] = map_frame_.sawFinal() ? 1.0 : 0.0;
+    if (log_ && !map_frame_.sawFinal())
+      *log_ << "livo-exporter: trajectory_map.tum from livo-loop's corrections so far (its final one, sent at its "
+               "exit, did not arrive: stop livo-loop before the exporter)\n";
+  }
 
   MapSummary ms;
   if (map_stats_) {

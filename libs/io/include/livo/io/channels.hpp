@@ -27,6 +27,8 @@ struct ChannelConfig {
   std::string filter_state = "LIVO_FILTER_STATE";
   std::string resume_request = "LIVO_RESUME_REQUEST";
   std::string resume = "LIVO_RESUME";
+  // Loop closure: livo-loop's map frame (livo/io/loop_messages.hpp).
+  std::string map_correction = "LIVO_MAP_CORRECTION";
 
   /// Reads the `channels` section.
   void load(const ConfigNode& channels);

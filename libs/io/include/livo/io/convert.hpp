@@ -29,6 +29,7 @@ struct MessageLimits {
   std::int32_t max_visual_points = 1'000'000;
   std::int32_t max_patch_values = 4096;          ///< floats per stored patch pyramid
   std::int32_t max_patches_per_point = 64;
+  std::int32_t max_keyframes = 1'000'000;       ///< keyframes / loop edges per map correction
 };
 
 /// Result of a validation: empty `error` means valid.

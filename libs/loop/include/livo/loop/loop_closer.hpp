@@ -5,13 +5,15 @@
 
 #include "livo/common/config.hpp"
 #include "livo/common/types.hpp"
-#include "livo/loop/loop_verifier.hpp"
 #include "livo/loop/keyframe_store.hpp"
+#include "livo/loop/loop_verifier.hpp"
+#include "livo/loop/map_frame.hpp"
 #include "livo/loop/packed_points.hpp"
 #include "livo/loop/place_database.hpp"
 #include "livo/loop/pose_graph.hpp"
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -58,6 +60,13 @@ struct LoopStep {
   double search_ms = 0.0, verify_ms = 0.0, graph_ms = 0.0;  ///< time of the descriptor + search, checks, solve
 };
 
+/// What the loop closure did over a run (the loop_* counters of stats.json).
+struct LoopTotals {
+  int candidates = 0;  ///< places the searches proposed
+  int solves = 0;      ///< graph solves, finish()'s included
+  double ms = 0.0, search_ms = 0.0, verify_ms = 0.0, graph_ms = 0.0;  ///< time of add() + finish() and parts
+};
+
 class LoopCloser {
  public:
   explicit LoopCloser(LoopConfig cfg);
@@ -67,6 +76,9 @@ class LoopCloser {
   LoopStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
   /// Solves the graph when loops joined it since the last solve (at the end of a run); false otherwise.
   bool finish();
+  /// The correction after the last add() / finish(): every keyframe when `all` (or after a solve), else
+  /// the newest keyframe only; `final` marks the one sent at exit.
+  MapCorrection correctionMessage(bool all, bool final = false) const;
   /// T_map_odom: the odometry frame in the map frame (identity until a loop is closed).
   const Pose& correction() const { return graph_.correction(); }
   const PoseGraph& graph() const { return graph_; }
@@ -77,8 +89,14 @@ class LoopCloser {
   std::size_t pointsHeld() const { return points_held_; }
   std::size_t pointBytes() const { return store_.memoryBytes(); }
   std::size_t spilledBytes() const { return store_.spilledBytes(); }
+  const LoopTotals& totals() const { return totals_; }
+  /// The loop_* counters (stats.json) and the one-line summary of livo-run --loop and livo-loop.
+  void addCounters(std::map<std::string, double>& c) const;
+  std::string summary() const;
 
  private:
+  LoopStep addKeyframe(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
+
   LoopConfig cfg_;
   KeyframeSelector selector_;
   PlaceDatabase places_;
@@ -88,6 +106,9 @@ class LoopCloser {
   std::size_t points_held_ = 0;
   double last_loop_path_m_ = -1e300;
   bool unsolved_loops_ = false;
+  bool solved_last_ = false;  ///< the last add() / finish() solved the graph
+  LoopTotals totals_;
+  std::vector<std::pair<std::int32_t, std::int32_t>> loop_edges_;
 };
 
 }  // namespace livo

@@ -6,7 +6,9 @@
 //       (its map_bytes column stays 0: no per-frame map size reaches the exporter);
 //   LIVO_REGISTERED_SCAN -> map.pcd (voxel grid, colour where a camera saw the point) and map.bt
 //       (rays from the frame's odometry position), written by finish();
-//   LIVO_MAP_STATS -> the newest one is the `map` section of stats.json, written by finish().
+//   LIVO_MAP_STATS -> the newest one is the `map` section of stats.json, written by finish();
+//   LIVO_MAP_CORRECTION (livo-loop) -> trajectory_map.tum, written by finish() when a correction came:
+//       every posed frame in the loop-corrected map frame (MapFrameTrajectory, as livo-run --loop).
 // Frames arriving at or before a frame already written are counted and dropped (the TUM file stays
 // strictly increasing). Only message times are used. An existing trajectory.tum / frames.csv in the
 // output directory is continued, never truncated (a restarted exporter: RunOutputs' append mode);
@@ -15,6 +17,7 @@
 
 #include "livo/io/channels.hpp"
 #include "livo/io/estimator_messages.hpp"
+#include "livo/io/loop_messages.hpp"
 #include "livo/io/map_messages.hpp"
 #include "livo/io/run_outputs.hpp"
 #include "livo/process/lcm_node.hpp"
@@ -41,6 +44,7 @@ class ExporterNode {
   void onStats(const EstimatorStats& s);
   void onRegisteredScan(const RegisteredScan& s);
   void onMapStats(const MapStats& m);
+  void onMapCorrection(const MapCorrection& c);
 
   /// Writes the frames still pending, stats.json, map.pcd and map.bt. Call once, at the end.
   void finish();
@@ -89,6 +93,9 @@ class ExporterNode {
   std::map<Utime, Eigen::Vector3d> origins_;  ///< odometry positions by frame time
   std::deque<HeldScan> held_scans_;           ///< registered scans waiting for their odometry
   std::optional<MapStats> map_stats_;
+  MapFrameTrajectory map_frame_;                       ///< livo-loop's keyframes
+  std::vector<std::pair<Utime, Pose>> odometry_poses_;  ///< posed frames written, for trajectory_map.tum
+  bool map_corrections_ = false;
   std::map<std::string, double> counters_;
   bool finished_ = false;
 };

@@ -1,0 +1,93 @@
+// livo-loop --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--memory-cap-mb N] [--report-interval S]
+//           [--print-config]
+//
+// Loop closure beside the odometry (LoopNode, libs/loop): keyframes from LIVO_ODOMETRY and
+// LIVO_REGISTERED_SCAN, place recognition, verified loops and a pose graph; publishes the map frame on
+// LIVO_MAP_CORRECTION after every keyframe and, on SIGINT / SIGTERM / --idle-exit, after its last solve.
+// Reads the config sections channels and loop (and the LiDAR's max_range_m, range_noise_m and
+// beam_noise_deg). --memory-cap-mb bounds the keyframe points held in memory (loop.points_budget_mb);
+// older keyframes' points go to a spill file in loop.spill_dir.
+#include "livo/common/config.hpp"
+#include "livo/common/timing.hpp"
+#include "livo/estimation/pipeline.hpp"
+#include "livo/io/channels.hpp"
+#include "livo/process/cli.hpp"
+#include "livo/process/lcm_node.hpp"
+#include "livo/process/loop_node.hpp"
+#include "livo/process/stop_signal.hpp"
+
+#include <cstring>
+#include <iostream>
+
+using namespace livo;
+
+int main(int argc, char** argv) {
+  installStopHandlers();
+  CommandLine cl("livo-loop",
+                 "Loop closure: keyframes from LIVO_ODOMETRY + LIVO_REGISTERED_SCAN, verified loops, a pose graph;\n"
+                 "publishes the map frame on LIVO_MAP_CORRECTION. Stops on SIGINT / SIGTERM with a final solve.");
+  ProcessArgs args;
+  double cap_mb = -1.0;
+  double report_interval_s = 30.0;
+  addProcessOptions(cl, args);
+  cl.number("--memory-cap-mb", &cap_mb, "N",
+            "keyframe points held in memory (0: no budget; older ones spill to disk; overrides loop.points_budget_mb)",
+            0.0)
+      .unit("MiB")
+      .defaultText("config loop.points_budget_mb");
+  cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
+      .unit("s");
+  if (const auto code = cl.parseOrExit(argc, argv)) return *code;
+
+  LoopConfig cfg;
+  ChannelConfig channels;
+  try {
+    ConfigFile file = ConfigFile::load(args.config);
+    const ConfigNode root = file.root();
+    PipelineConfig pipe;
+    pipe.load(root);
+    cfg.load(root.section("loop"), pipe.preprocess.max_range_m, pipe.lio.lio.range_noise_m, pipe.lio.lio.beam_noise_deg);
+    channels.load(root.section("channels"));
+    checkSectionsUsed(file, {"channels", "loop"});
+    if (cap_mb >= 0) cfg.points_budget_mb = cap_mb;
+    if (args.print_config) {
+      if (cap_mb >= 0) file.overrideEffective("loop.points_budget_mb", cap_mb);
+      printConfig(std::cout, cl.program(), file);
+      return kExitOk;
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "livo-loop: " << e.what() << "\n";
+    return kExitUsage;
+  }
+
+  try {
+    const std::string url = resolveLcmUrl(args.lcm_url);
+    LcmNode lcm(url, "livo-loop", &std::cerr);
+    LoopNode node(lcm, channels, cfg, &std::cerr);
+    std::cerr << "livo-loop: keyframe points budget ";
+    if (cfg.points_budget_mb > 0) std::cerr << cfg.points_budget_mb << " MiB";
+    else std::cerr << "none";
+    std::cerr << "; " << channels.odometry << " + " << channels.registered_scan << " -> " << channels.map_correction
+              << " on " << url << "\n";
+    double last_report_s = 0.0;
+    const auto poll = [&]() {
+      const double t = toSeconds(node.lastFrameTime());
+      if (report_interval_s > 0 && t - last_report_s >= report_interval_s) {
+        std::cerr << "livo-loop: " << node.progressLine() << "\n";
+        last_report_s = t;
+      }
+    };
+    const LcmNode::SpinEnd end = lcm.spin(args.idle_exit_s, poll);
+    lcm.drainOnStop();
+    std::cerr << "livo-loop: "
+              << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
+                                                 : stopSignal() ? strsignal(stopSignal()) : "stop requested")
+              << ", final solve and correction\n";
+    node.finish();
+    std::cout << node.summary() << "peak RSS " << bytesToMb(peakRssBytes()) << " MB\n";
+  } catch (const std::exception& e) {
+    std::cerr << "livo-loop: error: " << e.what() << "\n";
+    return kExitRunError;
+  }
+  return kExitOk;
+}
