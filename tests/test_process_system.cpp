@@ -467,6 +467,13 @@ TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
         kBin + "/livo-exporter --config ", " --out livo_out", "lcm-logplayer ", " my.lcm",
         "--lcm-url 'udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304'"})
     EXPECT_NE(cmds.find(needle), std::string::npos) << needle << "\n" << cmds;
+  // With loop closure: livo-loop with its own memory budget, started with the sinks.
+  rc = std::system((rl + " replay-loop --dry-run --var LIVO_BIN=" + kBin + " --var LOG=my.lcm > " + dir +
+                    "/cmds_loop.txt 2>&1")
+                       .c_str());
+  ASSERT_EQ(rc, 0) << readFile(dir + "/cmds_loop.txt");
+  EXPECT_NE(readFile(dir + "/cmds_loop.txt").find(kBin + "/livo-loop --config "), std::string::npos);
+  EXPECT_NE(readFile(dir + "/cmds_loop.txt").find(" --memory-cap-mb 128"), std::string::npos);
   // The binaries this suite builds exist where livo.pmd says.
   EXPECT_TRUE(fs::exists(kBin + "/livo-preprocess"));
   EXPECT_TRUE(fs::exists(kBin + "/livo-exporter"));
