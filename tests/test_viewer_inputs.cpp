@@ -5,12 +5,14 @@
 // livo-test-deps: livo_process
 #include "livo/io/convert.hpp"
 #include "livo/io/estimator_messages.hpp"
+#include "livo/io/loop_messages.hpp"
 #include "livo/io/map_messages.hpp"
 #include "livo/process/lcm_node.hpp"
 #include "livo/process/viewer_node.hpp"
 #include "livo/viewer/inbox.hpp"
 #include "livo/viewer/inset.hpp"
 #include "livo/viewer/run_directory.hpp"
+#include "livo/viewer/scene.hpp"
 #include "livo/viewer/screenshot.hpp"
 
 #include "process_test_files.hpp"
@@ -83,7 +85,9 @@ TEST(ViewerNode, ConvertsEveryChannelOverMemqAndCountsRejects) {
   Inbox inbox(2);
   ChannelConfig ch;
   ViewerNode node(lcm, ch, inbox, /*camera=*/true);
-  EXPECT_EQ(node.channelList(), "LIVO_REGISTERED_SCAN + LIVO_ODOMETRY + LIVO_ESTIMATOR_STATS + LIVO_MAP_STATS + LIVO_CAMERA");
+  EXPECT_EQ(node.channelList(),
+            "LIVO_REGISTERED_SCAN + LIVO_ODOMETRY + LIVO_ESTIMATOR_STATS + LIVO_MAP_STATS + LIVO_MAP_CORRECTION + "
+            "LIVO_CAMERA");
 
   for (int i = 1; i <= 5; ++i) {  // five scans into a queue of two: three dropped
     RegisteredScan s;
@@ -145,6 +149,73 @@ TEST(ViewerNode, ConvertsEveryChannelOverMemqAndCountsRejects) {
   EXPECT_EQ(b.image->width, 4);
   EXPECT_EQ(b.image->data[5], 6);
   EXPECT_EQ(b.drops.rejected, 1u);
+}
+
+namespace {
+
+/// Keyframe i at (10 i, 0, 0); after `solved`, its map pose is lifted by 0.1 i in y.
+MapCorrection correctionUpTo(int n, bool solved, int first) {
+  MapCorrection c;
+  c.keyframes_total = n;
+  c.first = first;
+  for (int i = first; i < n; ++i) {
+    KeyframePose k;
+    k.utime = Utime(i + 1) * 1'000'000;
+    k.T_odom.translation() = Vec3(10.0 * i, 0, 0);
+    k.T_map = k.T_odom;
+    if (solved) k.T_map.translation().y() = 0.1 * i;
+    c.keyframes.push_back(k);
+  }
+  if (solved) c.loops = {{0, n - 1}};
+  return c;
+}
+
+}  // namespace
+
+// livo-loop's corrections reach the scene through the adapter: the corrected keyframe path, the loop
+// edges between map-frame keyframes, the overlay's counts; a flood of corrections is bounded in the
+// inbox without losing the state (a full correction replaces what came before it).
+TEST(ViewerNode, LoopCorrectionsBecomeTheCorrectedPathAndLoopEdges) {
+  LcmNode lcm("memq://", "livo-viewer", nullptr);
+  Inbox inbox(2);
+  ChannelConfig ch;
+  ViewerNode node(lcm, ch, inbox, /*camera=*/false);
+  for (int n = 1; n <= 4; ++n) lcm.publish(ch.map_correction, toMsg(correctionUpTo(n, false, n - 1)));
+  lcm.publish(ch.map_correction, toMsg(correctionUpTo(5, true, 0)));  // a solve: all keyframes, one loop
+  livo::map_correction_t bad = toMsg(correctionUpTo(5, true, 0));
+  bad.loop_to[0] = 7;  // beyond the graph: rejected
+  lcm.publish(ch.map_correction, bad);
+  lcm.drain();
+  node.syncCounters();
+  Scene scene{SceneConfig{}};
+  const std::uint64_t v0 = scene.mapFrameVersion();
+  scene.apply(inbox.take());
+  EXPECT_NE(scene.mapFrameVersion(), v0);
+  const std::vector<Vec3> path = scene.mapFramePath();
+  ASSERT_EQ(path.size(), 5u);
+  EXPECT_LT((path[4] - Vec3(40, 0.4, 0)).norm(), 1e-9);
+  const auto edges = scene.loopEdges();
+  ASSERT_EQ(edges.size(), 1u);
+  EXPECT_LT((edges[0].first - Vec3(0, 0, 0)).norm(), 1e-9);
+  EXPECT_LT((edges[0].second - Vec3(40, 0.4, 0)).norm(), 1e-9);
+  const std::string text = overlayText(scene.overlay("live", ViewMode::kTop, ColourMode::kHeight));
+  EXPECT_NE(text.find("loop closure: 5 keyframes, 1 loops"), std::string::npos) << text;
+  EXPECT_NE(text.find("1 rejected"), std::string::npos) << text;
+
+  // More corrections than the inbox holds: the ones before the newest full correction go (counted).
+  Inbox small;
+  for (int n = 1; n <= int(Inbox::kMaxCorrections) + 10; ++n) {
+    small.pushCorrection(correctionUpTo(n, false, n - 1));
+    if (n == 100) small.pushCorrection(correctionUpTo(n, true, 0));
+  }
+  InboxBatch b = small.take();
+  // At the 257th, the 100 before the full one (pushed after the 100th) went; 166 followed it.
+  EXPECT_EQ(b.corrections.size(), 167u);
+  EXPECT_EQ(b.drops.corrections, 100u);
+  Scene flooded{SceneConfig{}};
+  flooded.apply(std::move(b));
+  EXPECT_EQ(flooded.mapFramePath().size(), Inbox::kMaxCorrections + 10) << "every keyframe kept";
+  EXPECT_EQ(flooded.loopEdges().size(), 1u);
 }
 
 TEST(ViewerRunDirectory, LoadsTrajectoryAndColouredMap) {

@@ -132,6 +132,10 @@ class Window {
       renderer_.setTrajectory(scene_.track().poses());
       track_version_ = scene_.track().version();
     }
+    if (scene_.mapFrameVersion() != map_frame_version_) {
+      renderer_.setMapFrame(scene_.mapFramePath(), scene_.loopEdges());
+      map_frame_version_ = scene_.mapFrameVersion();
+    }
     std::optional<std::array<livo::Vec3, 5>> frustum;
     if (opt_.intrinsics.valid() && !scene_.track().empty())
       frustum = frustumCorners(opt_.intrinsics, scene_.track().last().T_world_imu * opt_.T_imu_camera,
@@ -169,7 +173,7 @@ class Window {
   ColourMode colour_;
   FollowCamera follow_;
   livo::Stopwatch clock_;  // wall clock: only how often the map is re-sent to VTK
-  std::uint64_t map_version_ = ~0ull, scan_version_ = ~0ull, track_version_ = ~0ull;
+  std::uint64_t map_version_ = ~0ull, scan_version_ = ~0ull, track_version_ = ~0ull, map_frame_version_ = 0;
   double last_map_draw_s_ = -1e9;
   bool force_map_ = false;
   std::size_t drawn_map_points_ = 0;

@@ -119,6 +119,8 @@ struct Renderer::Impl {
   vtkRenderer* ren = nullptr;
   LineActor trajectory{livo::viewer::kTrajectoryColour, 3.0};
   LineActor frustum{livo::viewer::kFrustumColour, 2.0};
+  LineActor map_path{livo::viewer::kMapPathColour, 2.0};
+  LineActor loop_edges{livo::viewer::kLoopEdgeColour, 2.0};
   vtkSmartPointer<vtkImageData> image = vtkSmartPointer<vtkImageData>::New();
   vtkSmartPointer<vtkImageMapper> image_mapper = vtkSmartPointer<vtkImageMapper>::New();
   vtkSmartPointer<vtkActor2D> image_actor = vtkSmartPointer<vtkActor2D>::New();
@@ -159,6 +161,10 @@ Renderer::Renderer(const RendererOptions& opt) : impl_(std::make_unique<Impl>())
   m.trajectory = LineActor(livo::viewer::kTrajectoryColour, opt.line_width);
   m.ren->AddActor(m.trajectory.actor);
   m.ren->AddActor(m.frustum.actor);
+  m.ren->AddActor(m.map_path.actor);
+  m.ren->AddActor(m.loop_edges.actor);
+  m.map_path.actor->SetVisibility(false);
+  m.loop_edges.actor->SetVisibility(false);
   m.trajectory.actor->SetVisibility(false);
   m.frustum.actor->SetVisibility(false);
   m.viz->addText("", 10, 10, kFontSize, 0.95, 0.95, 0.95, kTextId);
@@ -195,6 +201,19 @@ void Renderer::setTrajectory(const std::vector<livo::viewer::PoseInput>& poses) 
   pts.reserve(poses.size());
   for (const auto& p : poses) pts.push_back(p.T_world_imu.translation());
   impl_->trajectory.set(pts, {});
+}
+
+void Renderer::setMapFrame(const std::vector<livo::Vec3>& path,
+                           const std::vector<std::pair<livo::Vec3, livo::Vec3>>& loops) {
+  impl_->map_path.set(path, {});
+  std::vector<livo::Vec3> ends;
+  std::vector<std::pair<int, int>> segments;
+  for (const auto& [a, b] : loops) {
+    segments.emplace_back(int(ends.size()), int(ends.size() + 1));
+    ends.push_back(a);
+    ends.push_back(b);
+  }
+  impl_->loop_edges.set(ends, segments);
 }
 
 void Renderer::setFrustum(const std::optional<std::array<livo::Vec3, 5>>& corners) {

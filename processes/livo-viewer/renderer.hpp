@@ -39,6 +39,8 @@ class Renderer {
   void setMap(const livo::viewer::ColouredPoints& pts);
   void setScan(const livo::viewer::ColouredPoints& pts);
   void setTrajectory(const std::vector<livo::viewer::PoseInput>& poses);
+  /// The loop closure's corrected keyframe path (a line) and its loop edges (segments).
+  void setMapFrame(const std::vector<livo::Vec3>& path, const std::vector<std::pair<livo::Vec3, livo::Vec3>>& loops);
   /// The frustum lines (frustumCorners()); nullopt hides it.
   void setFrustum(const std::optional<std::array<livo::Vec3, 5>>& corners);
   void setText(const std::string& text);

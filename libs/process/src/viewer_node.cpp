@@ -2,6 +2,7 @@
 
 #include "livo/io/estimator_messages.hpp"
 #include "livo/io/image_convert.hpp"
+#include "livo/io/loop_messages.hpp"
 #include "livo/io/map_messages.hpp"
 
 namespace livo {
@@ -31,7 +32,11 @@ ViewerNode::ViewerNode(LcmNode& lcm, const ChannelConfig& channels, viewer::Inbo
     inbox_.pushMapStats(viewer::MapStatsInput{m.utime, m.bytes, m.bytes_cap, m.local_voxels,
                                               m.visual_points_local + m.visual_points_longterm});
   });
-  channels_ = {channels.registered_scan, channels.odometry, channels.estimator_stats, channels.map_stats};
+  lcm_.subscribeStruct<livo::map_correction_t, MapCorrection>(channels.map_correction, [this](MapCorrection& c) {
+    inbox_.pushCorrection(std::move(c));
+  });
+  channels_ = {channels.registered_scan, channels.odometry, channels.estimator_stats, channels.map_stats,
+               channels.map_correction};
   if (camera) {
     lcm_.subscribe<livo::image_t>(channels.camera, [this](const livo::image_t& m) {
       Image img, gray;

@@ -38,6 +38,21 @@ void Inbox::pushImage(Image image) {
   image_ = std::move(image);
 }
 
+void Inbox::pushCorrection(MapCorrection correction) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  corrections_.push_back(std::move(correction));
+  if (corrections_.size() <= kMaxCorrections) return;
+  // Too many not taken: a full correction makes every one before it redundant.
+  for (std::size_t i = corrections_.size(); i-- > 0;)
+    if (corrections_[i].first == 0 && corrections_[i].keyframes.size() == std::size_t(corrections_[i].keyframes_total)) {
+      drops_.corrections += i;
+      corrections_.erase(corrections_.begin(), corrections_.begin() + std::ptrdiff_t(i));
+      return;
+    }
+  corrections_.erase(corrections_.begin());
+  ++drops_.corrections;
+}
+
 void Inbox::setRejected(std::uint64_t total) {
   std::lock_guard<std::mutex> lock(mutex_);
   drops_.rejected = total;
@@ -52,6 +67,7 @@ InboxBatch Inbox::take() {
   b.frame_stats.swap(frame_stats_);
   b.map_stats.swap(map_stats_);
   b.image.swap(image_);
+  b.corrections.swap(corrections_);
   b.drops = drops_;
   return b;
 }

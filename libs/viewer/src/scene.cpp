@@ -48,6 +48,9 @@ std::string overlayText(const OverlayData& d) {
   s += fmt("drawn %.0f map points (voxel %.2f m", double(d.map_points), d.voxel_m) +
        (d.map_evicted ? fmt(", %.0f evicted", double(d.map_evicted)) : "") + fmt("), scan %.0f", double(d.scan_points)) +
        "\n";
+  if (d.keyframes > 0)
+    s += fmt("loop closure: %.0f keyframes, %.0f loops", double(d.keyframes), double(d.loops)) +
+         (d.corrections_refused ? fmt(", %.0f corrections refused", double(d.corrections_refused)) : "") + "\n";
   s += fmt("dropped: %.0f scans, %.0f images, %.0f rejected", double(d.drops.scans), double(d.drops.images),
            double(d.drops.rejected)) +
        "\n";
@@ -72,7 +75,28 @@ void Scene::apply(InboxBatch batch) {
   }
   if (!batch.frame_stats.empty()) frame_ = batch.frame_stats.back();
   if (batch.map_stats) map_stats_ = batch.map_stats;
+  for (const MapCorrection& c : batch.corrections) {
+    if (!map_frame_.apply(c).empty()) ++corrections_refused_;  // another run's keyframes
+    ++map_frame_version_;
+  }
   drops_ = batch.drops;
+}
+
+std::vector<Vec3> Scene::mapFramePath() const {
+  std::vector<Vec3> out;
+  out.reserve(map_frame_.keyframes().size());
+  for (const auto& [i, k] : map_frame_.keyframes()) out.push_back(k.T_map.translation());
+  return out;
+}
+
+std::vector<std::pair<Vec3, Vec3>> Scene::loopEdges() const {
+  std::vector<std::pair<Vec3, Vec3>> out;
+  const auto& k = map_frame_.keyframes();
+  for (const auto& [a, b] : map_frame_.loops()) {
+    const auto ia = k.find(a), ib = k.find(b);
+    if (ia != k.end() && ib != k.end()) out.emplace_back(ia->second.T_map.translation(), ib->second.T_map.translation());
+  }
+  return out;
 }
 
 void Scene::addMapPoints(const ScanInput& points) { map_.add(points.points, points.intensity, points.rgb); }
@@ -86,6 +110,9 @@ void Scene::clear() {
   map_stats_.reset();
   first_utime_.reset();
   recent_.clear();
+  map_frame_ = MapFrameTrajectory{};
+  corrections_refused_ = 0;
+  ++map_frame_version_;
 }
 
 std::optional<Utime> Scene::lastUtime() const {
@@ -160,6 +187,9 @@ OverlayData Scene::overlay(const std::string& source, ViewMode view, ColourMode 
   d.scan_points = scan_.points.size();
   d.voxel_m = map_.config().voxel_m;
   d.map_evicted = map_.evicted();
+  d.keyframes = map_frame_.known();
+  d.loops = map_frame_.loops().size();
+  d.corrections_refused = corrections_refused_;
   d.drops = drops_;
   d.view = view;
   d.colour = colour;

@@ -1,5 +1,5 @@
 // livo-viewer's message side: subscribes on an LcmNode to LIVO_REGISTERED_SCAN, LIVO_ODOMETRY,
-// LIVO_ESTIMATOR_STATS, LIVO_MAP_STATS and (with `camera`) LIVO_CAMERA, validates and converts each
+// LIVO_ESTIMATOR_STATS, LIVO_MAP_STATS, LIVO_MAP_CORRECTION (livo-loop) and (with `camera`) LIVO_CAMERA, validates and converts each
 // message into the viewer's plain inputs (libs/viewer) and pushes it into the Inbox. It never waits
 // for the drawing: the LcmNode runs in its own thread and keeps reading the socket, and the Inbox drops
 // what the drawing loop has not taken (counted). Rejected messages are counted into the Inbox too.

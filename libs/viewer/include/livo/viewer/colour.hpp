@@ -17,6 +17,8 @@ struct Rgb {
 inline constexpr Rgb kTrajectoryColour{255, 0, 255};  ///< magenta: no colour map produces it
 inline constexpr Rgb kScanColour{255, 255, 255};      ///< the current scan
 inline constexpr Rgb kFrustumColour{255, 220, 0};
+inline constexpr Rgb kMapPathColour{0, 230, 255};     ///< cyan: the loop-corrected keyframe path
+inline constexpr Rgb kLoopEdgeColour{255, 40, 40};    ///< red: loop edges between keyframes
 inline constexpr Rgb kUnseenColour{90, 90, 90};       ///< image mode: points no camera saw
 inline constexpr Rgb kBackgroundColour{20, 20, 26};
 

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "livo/common/types.hpp"
+#include "livo/loop/map_frame.hpp"
 #include "livo/viewer/inputs.hpp"
 
 #include <cstdint>
@@ -18,9 +19,9 @@ namespace livo::viewer {
 
 /// Messages dropped by the viewer (never drawn), and rejected ones (failed validation upstream).
 struct DropCounters {
-  std::uint64_t scans = 0, images = 0;
+  std::uint64_t scans = 0, images = 0, corrections = 0;
   std::uint64_t rejected = 0;  ///< set by the adapter: messages that failed decoding or validation
-  std::uint64_t total() const { return scans + images + rejected; }
+  std::uint64_t total() const { return scans + images + corrections + rejected; }
 };
 
 /// What the drawing loop takes in one go.
@@ -30,9 +31,10 @@ struct InboxBatch {
   std::vector<FrameStatsInput> frame_stats;
   std::optional<MapStatsInput> map_stats;   ///< the latest
   std::optional<Image> image;               ///< the latest
+  std::vector<MapCorrection> corrections;   ///< livo-loop's, in arrival order
   DropCounters drops;                       ///< totals since the start
   bool empty() const {
-    return scans.empty() && poses.empty() && frame_stats.empty() && !map_stats && !image;
+    return scans.empty() && poses.empty() && frame_stats.empty() && !map_stats && !image && corrections.empty();
   }
 };
 
@@ -47,6 +49,10 @@ class Inbox {
   void pushFrameStats(const FrameStatsInput& stats);
   void pushMapStats(const MapStatsInput& stats);
   void pushImage(Image image);
+  /// A correction of the loop closure. Corrections queue up to kMaxCorrections; beyond, the oldest
+  /// that carries one keyframe goes (a full one after it holds that keyframe again; counted).
+  void pushCorrection(MapCorrection correction);
+  static constexpr std::size_t kMaxCorrections = 256;
   /// The adapter's count of rejected messages (a total, not an increment).
   void setRejected(std::uint64_t total);
 
@@ -62,6 +68,7 @@ class Inbox {
   std::vector<FrameStatsInput> frame_stats_;
   std::optional<MapStatsInput> map_stats_;
   std::optional<Image> image_;
+  std::vector<MapCorrection> corrections_;
   DropCounters drops_;
 };
 

@@ -42,6 +42,8 @@ struct OverlayData {
   double voxel_m = 0.0;
   std::uint64_t map_evicted = 0;
   DropCounters drops;
+  std::size_t keyframes = 0, loops = 0;     ///< the loop closure's map frame (0: no livo-loop heard)
+  std::size_t corrections_refused = 0;
   ViewMode view = ViewMode::kFollow;
   ColourMode colour = ColourMode::kHeight;
 };
@@ -84,6 +86,12 @@ class Scene {
   /// The current scan below clipZ(), in kScanColour.
   ColouredPoints scanPoints() const;
 
+  /// The loop closure's map frame: the keyframes' map-frame positions in graph order (the corrected
+  /// path) and the loop edges between known keyframes; version() changes with every correction.
+  std::vector<Vec3> mapFramePath() const;
+  std::vector<std::pair<Vec3, Vec3>> loopEdges() const;
+  std::uint64_t mapFrameVersion() const { return map_frame_version_; }
+
   OverlayData overlay(const std::string& source, ViewMode view, ColourMode colour) const;
   const SceneConfig& config() const { return cfg_; }
 
@@ -98,6 +106,9 @@ class Scene {
   DropCounters drops_;
   std::optional<Utime> first_utime_;
   std::deque<Utime> recent_;  ///< pose times of the last 2 s
+  MapFrameTrajectory map_frame_;
+  std::uint64_t map_frame_version_ = 0;
+  std::size_t corrections_refused_ = 0;
 };
 
 }  // namespace livo::viewer
