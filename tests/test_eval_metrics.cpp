@@ -79,6 +79,24 @@ TEST(Evaluate, TimeOffsetAndClearErrors) {
   EXPECT_NE(errorOf([&] { evaluate(gt, gt, bad); }).find("max_dt_s"), std::string::npos);
 }
 
+// A fixed alignment (livo-eval --align-like): the estimate is not aligned, so an error of its frame stays.
+TEST(Evaluate, AFixedAlignmentKeepsTheFrameError) {
+  const Trajectory gt = syntheticTrajectory();
+  Pose offset = Pose::Identity();
+  offset.translation() = Vec3(0.3, -0.4, 0.0);  // the estimate's frame 0.5 m off
+  Trajectory est = gt;
+  for (StampedPose& s : est) s.T_world_body = offset * s.T_world_body;
+  EXPECT_LT(evaluate(gt, est, EvalConfig()).ate.translation_m.max, 1e-9) << "aligned away";
+  EvalConfig fixed;
+  fixed.fixed_alignment = Sim3{};  // identity: the frames are the same
+  const EvalResult r = evaluate(gt, est, fixed);
+  EXPECT_NEAR(r.ate.translation_m.mean, 0.5, 1e-9);
+  EXPECT_NEAR(r.ate.translation_m.max, 0.5, 1e-9);
+  // The alignment of another run in the same (offset) frame takes the offset out.
+  fixed.fixed_alignment = evaluate(gt, est, EvalConfig()).T_gt_est;
+  EXPECT_LT(evaluate(gt, est, fixed).ate.translation_m.max, 1e-9);
+}
+
 TEST(Evaluate, ConfigLoadsKeysAndRejectsBadValues) {
   const ConfigFile file = ConfigFile::parse(
       "eval: {max_dt_s: 0.02, est_time_offset_s: -0.5, with_scale: true, rpe_deltas_m: [1, 4]}\n", "eval.yaml");

@@ -1,4 +1,5 @@
 // livo-eval --gt GT.tum --est EST.tum [--json] [--max-dt S] [--offset S] [--scale] [--rpe-delta M]...
+//           [--align-like EST_REF --align-like-gt GT_REF]
 // Absolute trajectory error after Umeyama alignment, relative pose error over distances, matched count.
 #include "livo/cli/command_line.hpp"
 #include "livo/eval/evaluate.hpp"
@@ -43,6 +44,12 @@ int main(int argc, char** argv) {
   cl.numbers("--rpe-delta", &config.rpe_deltas_m, "M", "RPE distance", 0.0, true)
       .unit("m")
       .defaultText("10%, 25%, 50% of the ground-truth path length rounded down to 1/2/5 x 10^k");
+  std::string align_est, align_gt;
+  cl.text("--align-like", &align_est, "EST_REF",
+          "do not align --est: map it with the alignment of EST_REF onto --align-like-gt (another run in the same "
+          "frame, e.g. the map-frame trajectory of the run that made a saved map), so the error includes the "
+          "estimate's own frame error");
+  cl.text("--align-like-gt", &align_gt, "GT_REF", "the ground truth of --align-like's run");
   cl.epilog(kEpilog);
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
@@ -50,6 +57,14 @@ int main(int argc, char** argv) {
     const livo::Trajectory gt = livo::readTum(gt_path);
     const livo::Trajectory est = livo::readTum(est_path);
     livo::EvalResult result;
+    if (align_est.empty() != align_gt.empty()) throw std::runtime_error("--align-like and --align-like-gt go together");
+    if (!align_est.empty()) {
+      try {
+        config.fixed_alignment = livo::evaluate(livo::readTum(align_gt), livo::readTum(align_est), config).T_gt_est;
+      } catch (const std::exception& e) {
+        throw std::runtime_error("--align-like " + align_est + " --align-like-gt " + align_gt + ": " + e.what());
+      }
+    }
     try {
       result = livo::evaluate(gt, est, config);
     } catch (const std::exception& e) {

@@ -70,8 +70,8 @@ EvalResult evaluate(const Trajectory& gt, const Trajectory& est, const EvalConfi
     p_span.push_back(gt[k].T_world_body.translation());
   r.path_length_m = pathLength(p_span);
 
-  // 3. Align the estimate onto the ground truth (Umeyama on positions).
-  r.T_gt_est = umeyama(p_est, p_gt, config.with_scale);
+  // 3. Align the estimate onto the ground truth (Umeyama on positions), unless the alignment is given.
+  r.T_gt_est = config.fixed_alignment ? *config.fixed_alignment : umeyama(p_est, p_gt, config.with_scale);
   std::vector<Pose> est_aligned;
   est_aligned.reserve(est_matched.size());
   for (const Pose& T : est_matched) est_aligned.push_back(r.T_gt_est.apply(T));

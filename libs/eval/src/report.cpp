@@ -68,6 +68,7 @@ std::string toJson(const EvalResult& r, const EvalConfig& config) {
   o.number("mean_abs_dt_s", r.mean_abs_dt_s).number("max_dt_s", config.max_dt_s);
   o.number("time_offset_s", config.est_time_offset_s);
   o.boolean("scale_estimated", config.with_scale).number("scale", r.T_gt_est.s);
+  o.boolean("alignment_fixed", config.fixed_alignment.has_value());
   o.field("T_gt_est", array(T.data(), T.size()));
   o.field("rpe", rpe);
   return o.str();
@@ -84,7 +85,7 @@ std::string toText(const EvalResult& r, const EvalConfig& config) {
   out << buf;
   std::snprintf(buf, sizeof(buf),
                 "alignment    %s, T_gt_est t = [%.4f %.4f %.4f] m, q = [%.5f %.5f %.5f %.5f], scale %.6f\n",
-                config.with_scale ? "Sim(3)" : "SE(3)", T[0], T[1], T[2], T[3], T[4], T[5], T[6], r.T_gt_est.s);
+                config.fixed_alignment ? "fixed (--align-like)" : config.with_scale ? "Sim(3)" : "SE(3)", T[0], T[1], T[2], T[3], T[4], T[5], T[6], r.T_gt_est.s);
   out << buf;
   const ErrorStats& a = r.ate.translation_m;
   std::snprintf(buf, sizeof(buf), "ATE trans    rmse %.4f  mean %.4f  median %.4f  max %.4f  (m)\n", a.rmse,

@@ -7,6 +7,7 @@
 #include "livo/eval/tum.hpp"
 
 #include <string>
+#include <optional>
 #include <vector>
 
 namespace livo {
@@ -19,6 +20,9 @@ struct EvalConfig {
   bool with_scale = false;          ///< Sim(3) alignment (monocular); SE(3) otherwise
   std::vector<double> rpe_deltas_m; ///< RPE distances (m); empty = defaultRpeDeltas(path length)
   std::size_t min_matched = 3;      ///< fewer matched pairs is an error
+  /// Set: the estimate is mapped with this instead of being aligned (e.g. the alignment of another run
+  /// in the same frame: the error of a map-frame trajectory without aligning it). Not a config key.
+  std::optional<Sim3> fixed_alignment;
 
   /// Keys: max_dt_s, est_time_offset_s, with_scale, rpe_deltas_m, min_matched.
   void load(const ConfigNode& node);
