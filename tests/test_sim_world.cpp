@@ -71,10 +71,11 @@ namespace {
 // world.seed keeps the world while the scenario's seed changes the noise; unset, the world follows the
 // scenario's seed as before.
 TEST(SimWorld, WorldSeedKeepsTheWorldApartFromTheNoise) {
-  auto world = [](std::int64_t seed, std::int64_t world_seed) {
+  auto world = [](std::int64_t seed, std::int64_t world_seed, double start_m = 0.0) {
     SimScenario s = test::makeScenario("street", "avia", true);
     s.seed = seed;
     s.world.seed = world_seed;
+    s.trajectory.start_m = start_m;
     return Simulator(s);
   };
   auto same = [](const World& a, const World& b) {
@@ -93,6 +94,10 @@ TEST(SimWorld, WorldSeedKeepsTheWorldApartFromTheNoise) {
   for (std::size_t i = 0; !differ && i < sa.points.size(); ++i) differ = sa.points[i].p_lidar != sb.points[i].p_lidar;
   EXPECT_TRUE(differ) << "other sensor noise";
   EXPECT_NEAR(double(sa.points.size()), double(sb.points.size()), 0.01 * double(sa.points.size())) << "one world";
+  // With world.seed, another start on the path moves the robot, not the world (a second run in it).
+  const Simulator e = world(2, 7, 150.0);
+  EXPECT_TRUE(same(a.world(), e.world()));
+  EXPECT_GT((e.T_world_imu(e.lidarUtime(0)).translation() - a.T_world_imu(a.lidarUtime(0)).translation()).norm(), 10.0);
 }
 
 }  // namespace

@@ -1,10 +1,12 @@
 // livo-run LOG.lcm --config CFG.yaml --out DIR [--visual-mode adaptive|all|off] [--map-mode hybrid|global]
-//          [--threads N] [--max-frames N] [--no-maps] [--loop] [--progress] [--quiet] [--print-config]
+//          [--threads N] [--max-frames N] [--no-maps] [--loop] [--save-map DIR] [--prior-map DIR]
+//          [--progress] [--quiet] [--print-config]
 //
 // Runs the whole pipeline in one process (no network) on an LCM log, as fast as possible:
 // log events -> validated structs -> frame builder (recut sweeps + IMU + image) -> odometry -> outputs.
 // Writes DIR/trajectory.tum, DIR/frames.csv (map_bytes: see MapBytes in run_log.cpp), DIR/stats.json (with
-// --loop also DIR/trajectory_map.tum, the trajectory in the loop-corrected map frame); a
+// --loop also DIR/trajectory_map.tum, the trajectory in the loop-corrected map frame; with --prior-map
+// the same file in the saved site map's frame); a
 // progress line on stderr and a summary on stdout. A truncated or corrupt log stops the run with an
 // error after writing what was processed.
 #include "run_log.hpp"
@@ -40,6 +42,12 @@ void addOptions(CommandLine& cl, livo_run::Args& a) {
   cl.flag("--loop", &a.loop,
           "loop closure: keyframes, place recognition, verified loops and a pose graph (config section `loop`); "
           "writes trajectory_map.tum, the trajectory in the corrected map frame, and loop_* counters");
+  cl.text("--save-map", &a.save_map, "DIR",
+          "at the end, write the loop closer's keyframes (map-frame poses, place descriptors, points in tiles) as a "
+          "site map into DIR, to localise in later with --prior-map; implies --loop");
+  cl.text("--prior-map", &a.prior_map, "DIR",
+          "localise in the site map DIR (no initial pose needed): trajectory_map.tum holds the frames from the "
+          "first relocalised one on, in the map's frame; reloc_* counters in stats.json");
   addProgressOption(cl, &a.progress);
   cl.flag("--quiet", &a.quiet, "no progress line and no preprocessing summary");
   cl.flag("--print-config", &a.print_config, kPrintConfigHelp);
@@ -73,6 +81,12 @@ int main(int argc, char** argv) {
                  "stats.json into DIR, and map.pcd / map.bt unless --no-maps.");
   addOptions(cl, args);
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
+  if (!args.save_map.empty()) args.loop = true;
+  if (args.loop && !args.prior_map.empty()) {
+    std::cerr << "livo-run: --prior-map with --loop / --save-map is not supported yet (localise in one map, or make one)\n"
+              << "try 'livo-run --help'\n";
+    return kExitUsage;
+  }
 
   // 2. Configuration (or, with --print-config, only its effective values).
   livo_run::Config cfg;

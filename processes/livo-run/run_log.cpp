@@ -9,6 +9,8 @@
 #include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
+#include "livo/loop/relocaliser.hpp"
+#include "livo/loop/site_map.hpp"
 #include "livo/process/scan_colour.hpp"
 
 #include <algorithm>
@@ -65,7 +67,7 @@ class MapBytes {
 /// livo-loop process's corrections) and the loop_* counters go into stats.json.
 class LoopRun {
  public:
-  explicit LoopRun(const LoopConfig& cfg) : closer_(cfg) {}
+  LoopRun(const LoopConfig& cfg, std::string save_map) : cfg_(cfg), closer_(cfg), save_map_(std::move(save_map)) {}
 
   void add(const Frame& frame, const FrameResult& r) {
     if (!r.lio.initialized) return;
@@ -86,17 +88,86 @@ class LoopRun {
     TumWriter tum(dir + "/trajectory_map.tum");
     for (const FramePose& f : frames_)
       if (const auto T_map = map.toMap(f.utime, f.T_odom)) tum.write(toSeconds(f.utime), *T_map);
+    if (!save_map_.empty()) saveSiteMap(save_map_, closer_, cfg_.descriptor, cfg_.site_tile_m);
   }
 
   void addCounters(Counters& c) const { closer_.addCounters(c); }
-  std::string summary() const { return "loop closure: " + closer_.summary() + "; trajectory_map.tum\n"; }
+  std::string summary() const {
+    std::string s = "loop closure: " + closer_.summary() + "; trajectory_map.tum\n";
+    if (!save_map_.empty())
+      s += "site map: " + std::to_string(closer_.graph().size()) + " keyframes in " + save_map_ + " (--prior-map " +
+           save_map_ + " localises in it)\n";
+    return s;
+  }
 
  private:
   struct FramePose {
     Utime utime;
     Pose T_odom;
   };
+  LoopConfig cfg_;
   LoopCloser closer_;
+  std::string save_map_;
+  std::vector<FramePose> frames_;
+};
+
+/// --prior-map: every posed frame goes to the Relocaliser (its registered points when it tries the map);
+/// at the end trajectory_map.tum holds the frames from the first relocalised one on, each carried into
+/// the site map's frame by the last anchor at or before it, and the reloc_* counters go into stats.json.
+class PriorMapRun {
+ public:
+  PriorMapRun(const LoopConfig& cfg, const std::string& dir)
+      : site_(dir, cfg.site_budget_mb, cfg.descriptor), reloc_(cfg, site_) {}
+
+  /// Returns what to tell the user about this frame ("" when nothing).
+  std::string add(const Frame& frame, const FrameResult& r) {
+    if (!r.lio.initialized) return {};
+    const Pose T = r.lio.state.pose();
+    const RelocaliseStep st = reloc_.add(frame.utime, T, [&] {
+      std::vector<Vec3> world;
+      world.reserve(r.lio.points.size());
+      for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
+      return world;
+    });
+    frames_.push_back({frame.utime, T});
+    char buf[200];
+    if (st.localised_now) {
+      std::snprintf(buf, sizeof buf, "livo-run: localised in the site map at t=%.3f s (map keyframe %d)",
+                    toSeconds(frame.utime), st.map_keyframe);
+      return buf;
+    }
+    if (st.back_in_map) {
+      std::snprintf(buf, sizeof buf, "livo-run: back in the site map at t=%.3f s (map keyframe %d)",
+                    toSeconds(frame.utime), st.map_keyframe);
+      return buf;
+    }
+    if (st.left_map) {
+      std::snprintf(buf, sizeof buf,
+                    "livo-run: outside the site map at t=%.3f s (no map keyframe verified for loop.outside_map_after_m "
+                    "of travel): odometry only, carried by the last anchor, until it is back",
+                    toSeconds(frame.utime));
+      return buf;
+    }
+    return {};
+  }
+
+  void write(const std::string& dir) {
+    MapFrameTrajectory map;
+    map.apply(reloc_.anchors());
+    TumWriter tum(dir + "/trajectory_map.tum");
+    for (const FramePose& f : frames_)
+      if (const auto T_map = map.toMap(f.utime, f.T_odom)) tum.write(toSeconds(f.utime), *T_map);
+  }
+  void addCounters(Counters& c) const { reloc_.addCounters(c); }
+  std::string summary() const { return "site map " + site_.dir() + ": " + reloc_.summary() + "; trajectory_map.tum\n"; }
+
+ private:
+  struct FramePose {
+    Utime utime;
+    Pose T_odom;
+  };
+  SiteMap site_;
+  Relocaliser reloc_;
   std::vector<FramePose> frames_;
 };
 
@@ -109,7 +180,8 @@ class FrameSink {
             ProgressLine& progress)
       : cloud(cfg.exporter), occupancy(cfg.exporter), args_(args), cfg_(cfg), pipeline_(pipeline),
         outputs_(outputs), counters_(counters), progress_(progress), map_bytes_(pipeline) {
-    if (args.loop) loop.emplace(cfg.loop);
+    if (args.loop) loop.emplace(cfg.loop, args.save_map);
+    if (!args.prior_map.empty()) prior.emplace(cfg.loop, args.prior_map);
   }
 
   void operator()(const Frame& frame, const FrameResult& r) {
@@ -117,6 +189,8 @@ class FrameSink {
     if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
     outputs_.addFrame(record(frame, r));
     if (loop) loop->add(frame, r);
+    if (prior)
+      if (const std::string msg = prior->add(frame, r); !msg.empty() && !args_.quiet) progress_.message(msg);
     health.addFrame(frame.utime, r.lio.initialized, r.lidarFailed(), r.visual_used, r.degenerate);
     explain(frame, r);
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
@@ -138,6 +212,7 @@ class FrameSink {
   OccupancyMap occupancy;
   RunHealth health;
   std::optional<LoopRun> loop;  ///< with --loop
+  std::optional<PriorMapRun> prior;  ///< with --prior-map
   std::string last_wait;  ///< what the initialisation waited for at the last frame without a pose
 
  private:
@@ -324,6 +399,10 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
     sink.loop->write(args.out);
     sink.loop->addCounters(counters);
   }
+  if (sink.prior) {
+    sink.prior->write(args.out);
+    sink.prior->addCounters(counters);
+  }
   counters["map_bt_scans_dropped"] = double(sink.occupancy.scansDropped());
   counters["map_bt_scans_capped"] = double(sink.occupancy.scansCapped());
   const ImageCheckCounters& ic = pipeline.frames().imageCounters();
@@ -338,6 +417,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
                                            {"log", args.log}, {"config", args.config}};
   if (!log_error.empty()) notes["log_error"] = log_error;
   if (args.loop) notes["loop"] = "on";
+  if (!args.prior_map.empty()) notes["prior_map"] = args.prior_map;
   if (const std::string note = sink.occupancy.capNote(); !note.empty()) notes["map_bt"] = note;
   if (!sink.health.anyPose())
     sink.health.no_pose_reason = outputs.frames() == 0 ? "no complete frame in the log (LiDAR scans with IMU samples)"
@@ -345,6 +425,7 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
   outputs.writeStats(ms, rss, counters, notes, &sink.health);
   std::cout << outputs.summary(rss);
   if (sink.loop) std::cout << sink.loop->summary();
+  if (sink.prior) std::cout << sink.prior->summary();
   if (!args.quiet) std::cout << "preprocessing:\n" << pst.summary() << "\n";
   std::cout << "outputs in " << args.out << "\n";
   if (!log_error.empty()) {

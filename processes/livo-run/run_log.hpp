@@ -23,6 +23,8 @@ struct Args {
   bool progress = false;  ///< the progress line also when stderr is not a terminal
   bool no_maps = false;  ///< skip map.pcd / map.bt (benchmarks: only the odometry's cost)
   bool loop = false;     ///< loop closure (libs/loop): trajectory_map.tum and the loop counters
+  std::string save_map;  ///< with loop closure: the site map written here at the end (site_map.hpp)
+  std::string prior_map; ///< localise in this site map: trajectory_map.tum in its frame (relocaliser.hpp)
   std::int64_t max_frames = -1;
   bool print_config = false;
 };

@@ -19,6 +19,19 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   loop.get("keyframe_points_m", keyframe_points_m).get("verify_candidates", verify_candidates);
   loop.get("loop_spacing_m", loop_spacing_m).get("solve_sigmas", solve_sigmas);
   loop.get("points_budget_mb", points_budget_mb).get("spill_dir", spill_dir);
+  loop.get("site_tile_m", site_tile_m).get("site_budget_mb", site_budget_mb);
+  loop.get("relocalise_every_frames", relocalise_every_frames).get("relocalise_agree_m", relocalise_agree_m);
+  loop.get("relocalise_agree_deg", relocalise_agree_deg).get("outside_map_after_m", outside_map_after_m);
+  loop.check(std::isfinite(site_tile_m) && site_tile_m >= 1 && site_tile_m <= 1e5, "site_tile_m", "must be in [1, 1e5] m");
+  loop.check(std::isfinite(site_budget_mb) && site_budget_mb >= 0 && site_budget_mb <= 1e6, "site_budget_mb",
+             "must be in [0, 1e6] MB (0: no budget)");
+  loop.check(relocalise_every_frames >= 1 && relocalise_every_frames <= 1000, "relocalise_every_frames",
+             "must be in [1, 1000]");
+  loop.check(std::isfinite(relocalise_agree_m) && relocalise_agree_m > 0, "relocalise_agree_m", "must be > 0");
+  loop.check(std::isfinite(relocalise_agree_deg) && relocalise_agree_deg > 0, "relocalise_agree_deg", "must be > 0");
+  loop.check(std::isfinite(outside_map_after_m) && outside_map_after_m >= 0, "outside_map_after_m",
+             "must be >= 0 (0: twice loop.descriptor_range_m)");
+  if (outside_map_after_m == 0.0) outside_map_after_m = 2.0 * descriptor.max_range_m;
   loop.check(std::isfinite(points_budget_mb) && points_budget_mb >= 0 && points_budget_mb <= 1e6, "points_budget_mb",
              "must be in [0, 1e6] MB (0: no budget)");
   loop.check(spill_dir.empty() || std::filesystem::is_directory(spill_dir), "spill_dir",

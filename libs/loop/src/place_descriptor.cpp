@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <limits>
 
 namespace livo {
@@ -83,6 +85,29 @@ PlaceDescriptor PlaceDescriptor::compute(const std::vector<Vec3>& points, const 
     const double h = std::clamp((b.z - floor_z) / cfg.height_cap_m, 0.0, 1.0);
     d.cells_[b.cell] = std::max(d.cells_[b.cell], std::max(kSeen, static_cast<float>(h)));
   }
+  d.summarise();
+  return d;
+}
+
+PlaceDescriptor PlaceDescriptor::fromCells(int rings, int sectors, std::vector<float> cells) {
+  if (rings <= 0 || sectors <= 0 || cells.size() != std::size_t(rings) * std::size_t(sectors))
+    throw std::invalid_argument("place descriptor: " + std::to_string(cells.size()) + " cells for " +
+                                std::to_string(rings) + " x " + std::to_string(sectors));
+  for (const float c : cells)
+    if (!(c >= 0.f && c <= 1.f)) throw std::invalid_argument("place descriptor: a cell outside [0, 1]");
+  PlaceDescriptor d;
+  d.rings_ = rings;
+  d.sectors_ = sectors;
+  d.cells_ = std::move(cells);
+  d.summarise();
+  return d;
+}
+
+void PlaceDescriptor::summarise() {
+  const auto R = static_cast<std::size_t>(rings_), S = static_cast<std::size_t>(sectors_);
+  ring_key_.assign(R, 0.f);
+  col_norm_.assign(S, 0.f);
+  PlaceDescriptor& d = *this;
   for (std::size_t r = 0; r < R; ++r) {
     double sum = 0.0;
     for (std::size_t s = 0; s < S; ++s) sum += d.cells_[r * S + s];
@@ -93,7 +118,6 @@ PlaceDescriptor PlaceDescriptor::compute(const std::vector<Vec3>& points, const 
     for (std::size_t r = 0; r < R; ++r) n2 += double(d.cells_[r * S + s]) * d.cells_[r * S + s];
     d.col_norm_[s] = static_cast<float>(std::sqrt(n2));
   }
-  return d;
 }
 
 int PlaceDescriptor::occupiedSectors() const {

@@ -30,13 +30,23 @@ void addLidarStats(LidarStats& sum, const LidarStats& s) {
   sum.blind += s.blind;
   sum.grazing += s.grazing;
 }
+/// The path the world is laid out along. With world.seed set (one world for several runs), the path as
+/// if it started at its nominal start, so that trajectory.start_m moves the robot, not the buildings;
+/// without, the trajectory's own path (the worlds of every scenario as before).
+std::vector<Vec3> worldPath(const SimScenario& sc, const std::vector<Vec3>& trajectory_path) {
+  if (sc.world.seed < 0 || sc.trajectory.start_m == 0.0) return trajectory_path;
+  TrajectoryConfig nominal = sc.trajectory;
+  nominal.start_m = 0.0;
+  return makePathPolyline(nominal, sc.world);
+}
+
 }  // namespace
 
 Simulator::Simulator(SimScenario scenario, SimOptions options)
     : sc_(std::move(scenario)),
       opt_(options),
       traj_((sc_.validate(), sc_.trajectory), sc_.world),
-      world_(makeWorld(sc_, traj_.path())),
+      world_(makeWorld(sc_, worldPath(sc_, traj_.path()))),
       pattern_(sc_.lidar) {
   if (sc_.camera.enabled) camera_ = std::make_unique<SimCameraModel>(sc_.camera);
   start_ = sc_.startUtime();

@@ -39,6 +39,15 @@ struct LoopConfig {
   /// (read back when a candidate needs them); 0: no budget
   double points_budget_mb = 128.0;
   std::string spill_dir;  ///< loop.spill_dir: where the spill file goes ("": the system's temporary directory)
+  // A saved site map (site_map.hpp) and localising in one (relocaliser.hpp).
+  double site_tile_m = 100.0;      ///< loop.site_tile_m: edge of a site map's point tiles
+  double site_budget_mb = 64.0;    ///< loop.site_budget_mb: tiles' points held while localising (0: all)
+  int relocalise_every_frames = 5; ///< loop.relocalise_every_frames: before localised, try every Nth frame
+  double relocalise_agree_m = 0.5;    ///< loop.relocalise_agree_m: two tries agree within this ...
+  double relocalise_agree_deg = 2.0;  ///< loop.relocalise_agree_deg: ... and this, to localise
+  /// loop.outside_map_after_m: no map keyframe verified over this much travel: outside the map
+  /// (default 0: twice the descriptor's range)
+  double outside_map_after_m = 0.0;
 
   /// Reads the `loop` section. The LiDAR's keys are read by their own sections' configs and handed in:
   /// lidar.max_range_m (bounds the descriptor), lidar.range_noise_m and lidar.beam_noise_deg (the
@@ -84,6 +93,8 @@ class LoopCloser {
   const PoseGraph& graph() const { return graph_; }
   const PlaceDatabase& places() const { return places_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
+  /// Keyframe i's thinned points in its keyframe frame (from memory or the spill file).
+  PackedPoints keyframePoints(int i) const { return store_.get(i); }
   int loopsAccepted() const { return graph_.loops(); }
   /// Keyframe points held (in memory or spilled) and the bytes of those in memory and on disk.
   std::size_t pointsHeld() const { return points_held_; }

@@ -45,6 +45,10 @@ class PlaceDescriptor {
   static PlaceDescriptor computeAt(const std::vector<Vec3>& world_points, const Pose& T_world_body,
                                    const PlaceDescriptorConfig& cfg);
 
+  /// From stored cells (a saved site map): rings x sectors values in [0, 1], ring-major. Throws
+  /// std::invalid_argument on a wrong count or value.
+  static PlaceDescriptor fromCells(int rings, int sectors, std::vector<float> cells);
+  const std::vector<float>& cells() const { return cells_; }
   int rings() const { return rings_; }
   int sectors() const { return sectors_; }
   bool empty() const { return cells_.empty(); }
@@ -66,6 +70,7 @@ class PlaceDescriptor {
   std::vector<float> col_norm_;  // per sector, the norm of its column (0: empty)
   std::vector<float> ring_key_;  // per ring, the mean of its cells: invariant under a turn about z
 
+  void summarise();  ///< ring keys and column norms from the cells
   double distanceAtShift(const PlaceDescriptor& candidate, int shift, int* compared) const;
 };
 

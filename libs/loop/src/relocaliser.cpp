@@ -1,0 +1,153 @@
+#include "livo/loop/relocaliser.hpp"
+
+#include "livo/common/timing.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace livo {
+
+namespace {
+
+PlaceSearchConfig anyTime(PlaceSearchConfig c) {
+  c.min_path_m = 0.0;  // every map keyframe may match: the map is another run
+  return c;
+}
+
+/// A search query far along the path, so that every map keyframe (stored at path 0) is eligible.
+constexpr double kQueryPath = 1e12;
+
+}  // namespace
+
+Relocaliser::Relocaliser(const LoopConfig& cfg, SiteMap& map)
+    : cfg_(cfg), map_(map), selector_(cfg.keyframes), places_(anyTime(cfg.search)), verifier_(cfg.verify) {
+  for (int i = 0; i < static_cast<int>(map_.size()); ++i) {
+    PlaceEntry e;
+    e.utime = map_.keyframe(i).utime;
+    e.T_world_body = map_.keyframe(i).T_map;
+    e.descriptor = map_.keyframe(i).descriptor;
+    places_.add(std::move(e));
+  }
+}
+
+bool Relocaliser::check(const Pose& K, const std::vector<Vec3>& local, bool bounded, RelocaliseStep& st, Pose& H) {
+  const PlaceDescriptor d = PlaceDescriptor::compute(local, cfg_.descriptor);
+  const std::vector<PlaceCandidate> cands = places_.search(d, kQueryPath);
+  st.candidates += static_cast<int>(cands.size());
+  const double path_since = selector_.pathLength() - path_at_match_m_;
+  for (const PlaceCandidate& c : cands) {
+    if (st.checked >= cfg_.verify_candidates) break;
+    const SiteKeyframe& k = map_.keyframe(c.id);
+    // Localised: the map keyframe must be where the current transform puts it, within the odometry's
+    // drift since the last match. Not yet: no bound (the odometry's frame is unknown in the map's).
+    const Pose predicted = bounded ? k.T_map.inverse() * T_map_odom_ * K : Pose::Identity();
+    ++st.checked;
+    const LoopCheck lc = verifier_.verify(map_.points(c.id), local, c.match.yaw_rad, predicted,
+                                          bounded ? path_since : std::numeric_limits<double>::max() / 4);
+    if (!lc.accepted) continue;
+    H = k.T_map * lc.T_cand_query * K.inverse();
+    st.map_keyframe = c.id;
+    return true;
+  }
+  return false;
+}
+
+RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
+  RelocaliseStep st;
+  if (first_frame_ < 0) first_frame_ = t;
+  const bool key = selector_.offer(T_odom_body);
+  const bool try_now = localised_ ? key : (key || ++frames_since_attempt_ >= cfg_.relocalise_every_frames);
+  if (!try_now) return st;
+  frames_since_attempt_ = 0;
+  Stopwatch watch;
+  st.attempted = true;
+  ++attempts_;
+  const Pose K = keyframeFrame(T_odom_body);
+  const Pose K_inv = K.inverse();
+  std::vector<Vec3> local = scan();
+  for (Vec3& p : local) p = K_inv * p;
+
+  Pose H = Pose::Identity();
+  const bool ok = check(K, local, localised_, st, H);
+  if (ok && !localised_) {
+    // Localise when two tries at different times agree on where the odometry's frame sits.
+    if (have_hypothesis_ && hypothesis_t_ != t) {
+      const Pose diff = hypothesis_.inverse() * H;
+      if (diff.translation().norm() < cfg_.relocalise_agree_m &&
+          rotationAngle(diff.linear()) < cfg_.relocalise_agree_deg * M_PI / 180.0) {
+        localised_ = true;
+        first_localised_ = t;
+        st.localised_now = true;
+      }
+    }
+    hypothesis_ = H;
+    hypothesis_t_ = t;
+    have_hypothesis_ = true;
+  }
+  if (ok && localised_) {
+    T_map_odom_ = H;
+    anchors_.push_back(KeyframePose{t, K, H * K});
+    path_at_match_m_ = selector_.pathLength();
+    st.matched = true;
+    if (outside_) {
+      outside_ = false;
+      st.back_in_map = true;
+    }
+  } else if (localised_ && !outside_ && selector_.pathLength() - path_at_match_m_ > cfg_.outside_map_after_m) {
+    outside_ = true;
+    ++left_map_;
+    st.left_map = true;
+  }
+  st.ms = watch.elapsedMs();
+  ms_ += st.ms;
+  return st;
+}
+
+MapCorrection Relocaliser::anchors() const {
+  MapCorrection c;
+  c.keyframes = anchors_;
+  c.keyframes_total = static_cast<std::int32_t>(anchors_.size());
+  c.T_map_odom = T_map_odom_;
+  c.utime = anchors_.empty() ? 0 : anchors_.back().utime;
+  c.final = true;
+  return c;
+}
+
+std::string Relocaliser::summary() const {
+  char buf[320];
+  if (!localised_) {
+    std::snprintf(buf, sizeof buf, "not localised in the site map (%zu keyframes): %d tries, %d checks, none agreed",
+                  map_.size(), attempts_, checks().total());
+    return buf;
+  }
+  std::snprintf(buf, sizeof buf,
+                "localised %.2f s after the first frame; %zu anchors from %d tries (%d checks, %d accepted); left the "
+                "map %d times; %zu tile reads; %.0f ms in all",
+                toSeconds(first_localised_ - first_frame_), anchors_.size(), attempts_, checks().total(),
+                checks().accepted, left_map_, map_.tileReads(), ms_);
+  return buf;
+}
+
+void Relocaliser::addCounters(std::map<std::string, double>& c) const {
+  const LoopCheckCounts& n = checks();
+  c["reloc_site_keyframes"] = double(map_.size());
+  c["reloc_localised"] = localised_ ? 1.0 : 0.0;
+  c["reloc_time_to_localise_s"] = localised_ ? toSeconds(first_localised_ - first_frame_) : -1.0;
+  c["reloc_tries"] = double(attempts_);
+  c["reloc_anchors"] = double(anchors_.size());
+  c["reloc_checks"] = double(n.total());
+  c["reloc_rejected_too_few_points"] = double(n.too_few_points);
+  c["reloc_rejected_no_convergence"] = double(n.no_convergence);
+  c["reloc_rejected_low_overlap"] = double(n.low_overlap);
+  c["reloc_rejected_high_residual"] = double(n.high_residual);
+  c["reloc_rejected_inconsistent"] = double(n.inconsistent);
+  c["reloc_left_map"] = double(left_map_);
+  c["reloc_tile_reads"] = double(map_.tileReads());
+  c["reloc_tiles_held"] = double(map_.tilesHeld());
+  c["reloc_tile_bytes_held"] = double(map_.bytesHeld());
+  c["reloc_index_bytes"] = double(map_.indexBytes());
+  c["reloc_ms_total"] = ms_;
+}
+
+}  // namespace livo
