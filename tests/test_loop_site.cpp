@@ -207,12 +207,14 @@ TEST(Relocaliser, LocalisesASecondRunFromAnotherStartWithoutAnInitialPose) {
   const std::string dir = tempDir("reloc");
   saveSiteMap(dir, m.closer, defaults(m.sc).descriptor, 100.0);
   const SecondRun r = secondRun(dir, 30.0, 64.0);
-  // 2026-12-06: localised at frame 5 (two agreeing tries 0.5 s apart, at rest), error mean 0.005 m,
-  // max 0.017 m over 294 frames. Bounds about twice the figures.
+  // 2026-12-06: localised at frame 5 (two agreeing tries 0.5 s apart, at rest), error mean 0.015 m,
+  // max 0.030 m over 294 frames (re-anchoring on every match: 0.005 / 0.017 m with this odometry's
+  // strong drift, but a match that slid along the street then moved livo-run's second run by 14 cm; the
+  // fused anchors follow the drift with a lag). Bounds about twice the figures.
   ASSERT_GE(r.first_localised, 0);
   EXPECT_LE(r.first_localised, 10) << "within a second of 10 Hz frames";
-  EXPECT_LT(r.mean_m, 0.01);
-  EXPECT_LT(r.max_m, 0.035);
+  EXPECT_LT(r.mean_m, 0.03);
+  EXPECT_LT(r.max_m, 0.06);
   EXPECT_EQ(r.left, 0);
 }
 
@@ -226,8 +228,8 @@ TEST(Relocaliser, LeavesAPartialMapAndComesBackIntoIt) {
   ASSERT_GE(r.first_localised, 0);
   EXPECT_EQ(r.left, 1);
   EXPECT_EQ(r.back, 1);
-  // 2026-12-06: error mean 0.177 m over the run (the drift of 0.5 % and 0.004 deg a scan outside the
-  // map included), max 0.515 m. Bounds about twice the figures. A 1 MB tile budget holds one or two
+  // 2026-12-06: error mean 0.203 m over the run (the drift of 0.5 % and 0.004 deg a scan outside the
+  // map included), max 0.538 m. Bounds about twice the figures. A 1 MB tile budget holds one or two
   // 25 m tiles.
   EXPECT_LT(r.mean_m, 0.35);
   EXPECT_LT(r.max_m, 1.0);

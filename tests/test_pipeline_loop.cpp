@@ -89,4 +89,78 @@ TEST(LivoRunLoop, ClosesTheLoopOfTheRevisitScenario) {
   fs::remove_all(dir);
 }
 
+// Two runs in one world (issue "Come back to a place", item 4): the revisit block mapped by a first run
+// (livo-run --save-map), a second run from another start with other noise localising in that map with no
+// initial pose (livo-run --prior-map); its map-frame trajectory against the truth with the first run's
+// alignment only (livo-eval --align-like: the map's frame, not the second run, is aligned).
+TEST(LivoRunLoop, ASecondRunLocalisesInTheSavedMapOfTheFirst) {
+  for (const char* b : {"livo-sim", "livo-run", "livo-eval"})
+    if (!fs::exists(bin(b))) LIVO_SKIP() << bin(b) << " not built";
+  const fs::path dir = fs::temp_directory_path() / ("livo_test_reloc_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string scenario = slurp(std::string(LIVO_SOURCE_DIR) + "/config/sim/revisit.yaml");
+  std::string second = scenario;
+  ASSERT_NE(second.find("seed: 11\n"), std::string::npos);
+  second.replace(second.find("seed: 11\n"), 9, "seed: 12\n");
+  second.replace(second.find("world:\n"), 7, "world:\n  seed: 11\n");
+  second.replace(second.find("trajectory:\n"), 12, "trajectory:\n  start_m: 150.0\n");
+  {
+    std::ofstream(dir / "first.yaml") << scenario;
+    std::ofstream(dir / "second.yaml") << second;
+  }
+  const auto sim = [&](const std::string& name, double duration_s) {
+    return run(bin("livo-sim") + " --scenario " + (dir / (name + ".yaml")).string() + " --out " +
+               (dir / (name + ".lcm")).string() + " --gt " + (dir / (name + "_gt.tum")).string() + " --rig " +
+               (dir / (name + "_rig.yaml")).string() + " --duration " + std::to_string(duration_s) + " --quiet");
+  };
+  // The first run: one lap (48 s); the second: 30 s from 150 m along the block, the other way round the
+  // first's start.
+  ASSERT_EQ(sim("first", 48.0), 0);
+  ASSERT_EQ(sim("second", 30.0), 0);
+  const std::string site = (dir / "site").string();
+  const livo::test::Ran r1 = livo::test::runSplit(bin("livo-run") + " " + (dir / "first.lcm").string() + " --config " +
+                                                      (dir / "first_rig.yaml").string() + " --out " +
+                                                      (dir / "run1").string() + " --save-map " + site +
+                                                      " --no-maps --threads 1 --quiet",
+                                                  dir);
+  ASSERT_EQ(r1.rc, 0) << r1.err;
+  EXPECT_NE(r1.out.find("site map: "), std::string::npos) << r1.out;
+  const livo::test::Ran r2 = livo::test::runSplit(bin("livo-run") + " " + (dir / "second.lcm").string() + " --config " +
+                                                      (dir / "second_rig.yaml").string() + " --out " +
+                                                      (dir / "run2").string() + " --prior-map " + site +
+                                                      " --no-maps --threads 1",
+                                                  dir);
+  ASSERT_EQ(r2.rc, 0) << r2.err;
+  EXPECT_NE(r2.err.find("localised in the site map at t="), std::string::npos) << r2.err;
+  const std::string stats = slurp(dir / "run2" / "stats.json");
+  const double to_localise = livo::test::jsonNumberAfter(stats, "\"counters\"", "reloc_time_to_localise_s");
+  const livo::test::Ran ev = livo::test::runSplit(
+      bin("livo-eval") + " --json --gt " + (dir / "second_gt.tum").string() + " --est " +
+          (dir / "run2" / "trajectory_map.tum").string() + " --align-like " + (dir / "run1" / "trajectory_map.tum").string() +
+          " --align-like-gt " + (dir / "first_gt.tum").string(),
+      dir);
+  ASSERT_EQ(ev.rc, 0) << ev.err;
+  EXPECT_NE(ev.out.find("\"alignment_fixed\": true"), std::string::npos) << ev.out;
+  const double mean = livo::test::jsonNumberAfter(ev.out, "{", "ate_mean_m");
+  const double max = livo::test::jsonNumberAfter(ev.out, "{", "ate_max_m");
+  std::printf("[ second run ] localised %.2f s after the first frame; map-frame error without aligning it: mean %.2f cm, "
+              "max %.2f cm\n",
+              to_localise, 100 * mean, 100 * max);
+  // 2026-12-06: localised 0.50 s after the first frame (two agreeing tries at rest); mean 1.28 cm, max
+  // 7.4 cm (in the first turn). The issue's target: within 3 s, mean <= 10 cm. Bounds about twice.
+  EXPECT_GE(to_localise, 0.0);
+  EXPECT_LE(to_localise, 1.0);
+  EXPECT_LE(mean, 0.026);
+  EXPECT_LE(max, 0.15);
+
+  // A site map that is not there: exit 1 naming it.
+  const livo::test::Ran bad = livo::test::runSplit(bin("livo-run") + " " + (dir / "second.lcm").string() + " --config " +
+                                                       (dir / "second_rig.yaml").string() + " --out " +
+                                                       (dir / "bad").string() + " --prior-map " + (dir / "nomap").string(),
+                                                   dir);
+  EXPECT_EQ(bad.rc, 1);
+  EXPECT_NE(bad.err.find("nomap/site.bin: cannot open"), std::string::npos) << bad.err;
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -1,5 +1,5 @@
-// livo-loop --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--memory-cap-mb N] [--report-interval S]
-//           [--print-config]
+// livo-loop --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--memory-cap-mb N] [--save-map DIR]
+//           [--report-interval S] [--print-config]
 //
 // Loop closure beside the odometry (LoopNode, libs/loop): keyframes from LIVO_ODOMETRY and
 // LIVO_REGISTERED_SCAN, place recognition, verified loops and a pose graph; publishes the map frame on
@@ -11,6 +11,7 @@
 #include "livo/common/timing.hpp"
 #include "livo/estimation/pipeline.hpp"
 #include "livo/io/channels.hpp"
+#include "livo/loop/site_map.hpp"
 #include "livo/process/cli.hpp"
 #include "livo/process/lcm_node.hpp"
 #include "livo/process/loop_node.hpp"
@@ -29,12 +30,16 @@ int main(int argc, char** argv) {
   ProcessArgs args;
   double cap_mb = -1.0;
   double report_interval_s = 30.0;
+  std::string save_map;
   addProcessOptions(cl, args);
   cl.number("--memory-cap-mb", &cap_mb, "N",
             "keyframe points held in memory (0: no budget; older ones spill to disk; overrides loop.points_budget_mb)",
             0.0)
       .unit("MiB")
       .defaultText("config loop.points_budget_mb");
+  cl.text("--save-map", &save_map, "DIR",
+          "at exit, after the last solve, write the keyframes as a site map into DIR (livo-run --prior-map DIR "
+          "localises in it)");
   cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
       .unit("s");
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
@@ -84,6 +89,10 @@ int main(int argc, char** argv) {
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")
               << ", final solve and correction\n";
     node.finish();
+    if (!save_map.empty()) {
+      saveSiteMap(save_map, node.closer(), cfg.descriptor, cfg.site_tile_m);
+      std::cerr << "livo-loop: site map of " << node.closer().graph().size() << " keyframes in " << save_map << "\n";
+    }
     std::cout << node.summary() << "peak RSS " << bytesToMb(peakRssBytes()) << " MB\n";
   } catch (const std::exception& e) {
     std::cerr << "livo-loop: error: " << e.what() << "\n";

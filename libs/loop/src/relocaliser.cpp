@@ -69,7 +69,7 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   for (Vec3& p : local) p = K_inv * p;
 
   Pose H = Pose::Identity();
-  const bool ok = check(K, local, localised_, st, H);
+  bool ok = check(K, local, localised_, st, H);
   if (ok && !localised_) {
     // Localise when two tries at different times agree on where the odometry's frame sits.
     if (have_hypothesis_ && hypothesis_t_ != t) {
@@ -85,9 +85,14 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
     hypothesis_t_ = t;
     have_hypothesis_ = true;
   }
+  if (ok && localised_ && !st.localised_now) ok = fuse(K, H);
   if (ok && localised_) {
-    T_map_odom_ = H;
-    anchors_.push_back(KeyframePose{t, K, H * K});
+    if (st.localised_now) {  // the first anchor: the match itself, with the match's variance
+      T_map_odom_ = H;
+      var_t_ = std::pow(cfg_.graph.loop_sigma_m, 2);
+      var_r_ = std::pow(cfg_.graph.loop_sigma_deg * M_PI / 180.0, 2);
+    }
+    anchors_.push_back(KeyframePose{t, K, T_map_odom_ * K});
     path_at_match_m_ = selector_.pathLength();
     st.matched = true;
     if (outside_) {
@@ -102,6 +107,34 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   st.ms = watch.elapsedMs();
   ms_ += st.ms;
   return st;
+}
+
+bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
+  // The odometry's drift since the last anchor widens the current transform's variance; the match
+  // narrows it. Fused at the keyframe: its map pose moves from the prediction towards the match's by the
+  // gains (translation and rotation apart), a match beyond 3 sigma of the prediction is refused.
+  const double path = selector_.pathLength() - path_at_match_m_;
+  const double q_t = std::pow(0.01 + cfg_.graph.odometry_sigma_fraction * path, 2);
+  const double q_r = std::pow((0.05 + cfg_.graph.odometry_sigma_deg_per_m * path) * M_PI / 180.0, 2);
+  const double r_t = std::pow(cfg_.graph.loop_sigma_m, 2), r_r = std::pow(cfg_.graph.loop_sigma_deg * M_PI / 180.0, 2);
+  const double p_t = var_t_ + q_t, p_r = var_r_ + q_r;
+  const Pose pred = T_map_odom_ * K, meas = H_meas * K;
+  const Vec3 dt = meas.translation() - pred.translation();
+  const Vec3 dr = logSO3(pred.linear().transpose() * meas.linear());
+  if (dt.norm() > 3.0 * std::sqrt(p_t + r_t) || dr.norm() > 3.0 * std::sqrt(p_r + r_r)) {
+    ++gated_;
+    var_t_ = p_t;  // the drift still happened
+    var_r_ = p_r;
+    return false;
+  }
+  const double k_t = p_t / (p_t + r_t), k_r = p_r / (p_r + r_r);
+  Pose fused = Pose::Identity();
+  fused.translation() = pred.translation() + k_t * dt;
+  fused.linear() = pred.linear() * expSO3(k_r * dr);
+  T_map_odom_ = fused * K.inverse();
+  var_t_ = (1.0 - k_t) * p_t;
+  var_r_ = (1.0 - k_r) * p_r;
+  return true;
 }
 
 MapCorrection Relocaliser::anchors() const {
@@ -143,6 +176,7 @@ void Relocaliser::addCounters(std::map<std::string, double>& c) const {
   c["reloc_rejected_high_residual"] = double(n.high_residual);
   c["reloc_rejected_inconsistent"] = double(n.inconsistent);
   c["reloc_left_map"] = double(left_map_);
+  c["reloc_matches_gated"] = double(gated_);
   c["reloc_tile_reads"] = double(map_.tileReads());
   c["reloc_tiles_held"] = double(map_.tilesHeld());
   c["reloc_tile_bytes_held"] = double(map_.bytesHeld());

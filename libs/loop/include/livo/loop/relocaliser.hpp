@@ -3,8 +3,9 @@
 // scan every few frames against the whole map (place search, then the geometric check of loop closure
 // without the odometry's bound); two checks at different times whose odometry-to-map transforms agree
 // localise it. From then on every keyframe is checked against the map keyframes the current transform
-// predicts (the odometry's drift bound since the last match applies), and each match re-anchors the
-// transform. Without a match for loop.outside_map_after_m of travel it reports that the robot left the
+// predicts (the odometry's drift bound since the last match applies), and each match is fused into the
+// transform (weights from the odometry's drift since the last anchor, loop.odometry_sigma_*, against the
+// match's, loop.loop_sigma_*; a match beyond 3 sigma is refused). Without a match for loop.outside_map_after_m of travel it reports that the robot left the
 // map (the odometry goes on; frames stay carried by the last anchor) and says when it is back.
 // docs/algorithms.md section 11, "Relocalisation".
 #pragma once
@@ -55,6 +56,9 @@ class Relocaliser {
  private:
   /// The map keyframes verified against the scan at K; the accepted one's T_map_odom in `H`.
   bool check(const Pose& K, const std::vector<Vec3>& local, bool bounded, RelocaliseStep& st, Pose& H);
+  /// Fuses a match (T_map_odom `H`) at keyframe frame K into the current transform; false when it is
+  /// farther from the prediction than 3 sigma (refused, counted).
+  bool fuse(const Pose& K, const Pose& H);
 
   LoopConfig cfg_;
   SiteMap& map_;
@@ -66,6 +70,8 @@ class Relocaliser {
   Utime hypothesis_t_ = 0;
   Pose T_map_odom_ = Pose::Identity();
   double path_at_match_m_ = 0.0;
+  double var_t_ = 0.0, var_r_ = 0.0;  ///< variance of the current transform at the last anchor (m^2, rad^2)
+  int gated_ = 0;
   int frames_since_attempt_ = 0, attempts_ = 0, left_map_ = 0;
   Utime first_frame_ = -1, first_localised_ = -1;
   std::vector<KeyframePose> anchors_;

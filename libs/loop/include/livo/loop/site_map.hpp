@@ -1,7 +1,7 @@
 // A map to come back to: the loop closer's keyframes saved at the end of a run (livo-run --save-map,
 // livo-loop --save-map) and loaded by a later run to localise in (livo-run --prior-map). The index holds
-// every keyframe's time, map-frame pose and place descriptor (searched whole: about 7.5 KB of memory a keyframe with the
-// default 20 x 60 descriptor); the keyframes' points are grouped into square tiles of the map's x-y plane,
+// every keyframe's time, map-frame pose and place descriptor (searched whole: about 7.5 KB of memory a
+// keyframe with the default 20 x 60 descriptor); the keyframes' points are grouped into square tiles of the map's x-y plane,
 // one file each, read when a keyframe of the tile is verified and dropped (least recently used first)
 // beyond a memory budget, so the points in memory stay bounded whatever the site's size.
 //
