@@ -63,7 +63,7 @@ livo::map_correction_t toMsg(const MapCorrection& c) {
   for (int i = 0; i < 4; ++i) m.orientation[i] = T[3 + i];
   m.keyframes_total = c.keyframes_total;
   m.solves = c.solves;
-  m.final = c.final;
+  m.is_final = c.final;
   m.first_keyframe = c.first;
   m.num_keyframes = std::int32_t(c.keyframes.size());
   m.keyframe_utime.resize(c.keyframes.size());
@@ -93,7 +93,7 @@ Validation fromMsg(const livo::map_correction_t& m, MapCorrection& out, const Me
   c.T_map_odom = poseFromArray(T);
   c.keyframes_total = m.keyframes_total;
   c.solves = m.solves;
-  c.final = m.final;
+  c.final = m.is_final;
   c.first = m.first_keyframe;
   c.keyframes.resize(std::size_t(m.num_keyframes));
   for (std::size_t i = 0; i < c.keyframes.size(); ++i)
