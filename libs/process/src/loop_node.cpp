@@ -7,8 +7,11 @@
 
 namespace livo {
 
-LoopNode::LoopNode(LcmNode& lcm, const ChannelConfig& channels, const LoopConfig& cfg, std::ostream* log)
-    : lcm_(lcm), channels_(channels), log_(log), closer_(cfg) {
+LoopNode::LoopNode(LcmNode& lcm, const ChannelConfig& channels, const LoopConfig& cfg, std::ostream* log,
+                   SiteMap* prior_map)
+    : lcm_(lcm), channels_(channels), log_(log) {
+  if (prior_map) reloc_ = std::make_unique<Relocaliser>(cfg, *prior_map);
+  else closer_.emplace(cfg);
   lcm_.subscribeStruct<livo::odometry_t, OdometryOutput>(channels_.odometry,
                                                           [this](OdometryOutput& o) { onOdometry(o); });
   lcm_.subscribeStruct<livo::registered_scan_t, RegisteredScan>(channels_.registered_scan,
@@ -68,14 +71,23 @@ void LoopNode::take(const OdometryOutput& o, const std::vector<Eigen::Vector3f>*
   last_taken_ = o.utime;
   counters_["frames"] += 1;
   if (!scan) counters_["frames_without_scan"] += 1;
-  const LoopStep st = closer_.add(o.utime, o.state.pose(), [&] {
+  const auto points = [&] {
     std::vector<Vec3> pts;
     if (scan) {
       pts.reserve(scan->size());
       for (const Eigen::Vector3f& p : *scan) pts.push_back(p.cast<double>());
     }
     return pts;
-  });
+  };
+  if (reloc_) {
+    const RelocaliseStep st = reloc_->add(o.utime, o.state.pose(), points);
+    if (log_ && (st.localised_now || st.back_in_map || st.left_map))
+      *log_ << "livo-loop: " << (st.left_map ? "outside the site map" : st.back_in_map ? "back in the site map" : "localised in the site map")
+            << " at t=" << std::fixed << std::setprecision(3) << toSeconds(o.utime) << " s\n";
+    if (st.matched) publish(false, false);
+    return;
+  }
+  const LoopStep st = closer_->add(o.utime, o.state.pose(), points);
   if (!st.keyframe) return;
   if (!scan) counters_["keyframes_without_scan"] += 1;
   if (st.loop && log_)
@@ -86,7 +98,17 @@ void LoopNode::take(const OdometryOutput& o, const std::vector<Eigen::Vector3f>*
 }
 
 void LoopNode::publish(bool all, bool final) {
-  lcm_.publish(channels_.map_correction, toMsg(closer_.correctionMessage(all, final)));
+  if (reloc_) {
+    MapCorrection c = reloc_->anchors();  // every anchor
+    c.final = final;
+    if (!all && !c.keyframes.empty()) {  // the newest only
+      c.first = static_cast<std::int32_t>(c.keyframes.size()) - 1;
+      c.keyframes.erase(c.keyframes.begin(), c.keyframes.end() - 1);
+    }
+    lcm_.publish(channels_.map_correction, toMsg(c));
+  } else {
+    lcm_.publish(channels_.map_correction, toMsg(closer_->correctionMessage(all, final)));
+  }
   counters_["corrections_published"] += 1;
 }
 
@@ -96,23 +118,26 @@ void LoopNode::finish() {
   pump(true);
   counters_["scans_without_odometry"] += double(scans_.size());
   scans_.clear();
-  closer_.finish();
+  if (closer_) closer_->finish();
   publish(true, true);
 }
 
 std::string LoopNode::progressLine() const {
   std::ostringstream os;
   const auto frames = counters_.find("frames");
-  os << "frames " << (frames == counters_.end() ? 0.0 : frames->second) << " taken; " << closer_.summary() << ", rejected "
+  os << "frames " << (frames == counters_.end() ? 0.0 : frames->second) << " taken; "
+     << (closer_ ? closer_->summary() : reloc_->summary()) << ", rejected "
      << lcm_.totalRejected();
   return os.str();
 }
 
 std::string LoopNode::summary() const {
   std::ostringstream os;
-  os << "loop closure: " << closer_.summary() << "\n";
+  if (closer_) os << "loop closure: " << closer_->summary() << "\n";
+  else os << "site map " << reloc_->summary() << "\n";
   std::map<std::string, double> c = counters_;
-  closer_.addCounters(c);
+  if (closer_) closer_->addCounters(c);
+  else reloc_->addCounters(c);
   for (const auto& [k, v] : c) os << "  " << k << ": " << v << "\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();

@@ -5,16 +5,22 @@
 //       without points sends no scan). Frames at or before one already taken are counted and dropped.
 //   -> LIVO_MAP_CORRECTION after every keyframe (the new keyframe; all keyframes after a graph solve),
 //       and at finish() after the last solve (all keyframes, `final`).
+// With a site map (livo-loop --prior-map) the frames go to a Relocaliser instead: every match publishes
+// the new anchor (a keyframe with its map pose), finish() all anchors; consumers treat them as above.
 // Only message times are used.
 #pragma once
 
 #include "livo/io/channels.hpp"
 #include "livo/io/estimator_messages.hpp"
 #include "livo/loop/loop_closer.hpp"
+#include "livo/loop/relocaliser.hpp"
+#include "livo/loop/site_map.hpp"
 #include "livo/process/lcm_node.hpp"
 
 #include <deque>
 #include <map>
+#include <memory>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -23,8 +29,9 @@ namespace livo {
 
 class LoopNode {
  public:
-  /// Subscribes on `lcm`.
-  LoopNode(LcmNode& lcm, const ChannelConfig& channels, const LoopConfig& cfg, std::ostream* log);
+  /// Subscribes on `lcm`. With `prior_map`: localises in that site map (it must outlive the node).
+  LoopNode(LcmNode& lcm, const ChannelConfig& channels, const LoopConfig& cfg, std::ostream* log,
+           SiteMap* prior_map = nullptr);
 
   // Message handlers (validated structs; also called directly by tests).
   void onOdometry(const OdometryOutput& o);
@@ -36,7 +43,9 @@ class LoopNode {
   /// Multi-line summary for stdout at exit (the loop counters, the messages).
   std::string summary() const;
 
-  const LoopCloser& closer() const { return closer_; }
+  /// The loop closer (loop closure) or the relocaliser (with a site map): the one in use.
+  const LoopCloser* closer() const { return closer_ ? &*closer_ : nullptr; }
+  const Relocaliser* relocaliser() const { return reloc_.get(); }
   /// Time of the last frame handed to the loop closer (0 before the first).
   Utime lastFrameTime() const { return last_taken_; }
   const std::map<std::string, double>& counters() const { return counters_; }
@@ -55,7 +64,8 @@ class LoopNode {
   LcmNode& lcm_;
   ChannelConfig channels_;
   std::ostream* log_;
-  LoopCloser closer_;
+  std::optional<LoopCloser> closer_;
+  std::unique_ptr<Relocaliser> reloc_;
   std::deque<OdometryOutput> pending_;
   std::map<Utime, std::vector<Eigen::Vector3f>> scans_;
   bool took_any_ = false;
