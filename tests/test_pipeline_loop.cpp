@@ -133,7 +133,7 @@ TEST(LivoRunLoop, ASecondRunLocalisesInTheSavedMapOfTheFirst) {
   ASSERT_EQ(r2.rc, 0) << r2.err;
   EXPECT_NE(r2.err.find("localised in the site map at t="), std::string::npos) << r2.err;
   const std::string stats = slurp(dir / "run2" / "stats.json");
-  const double to_localise = livo::test::jsonNumberAfter(stats, "\"counters\"", "reloc_time_to_localise_s");
+  const double to_localise = livo::test::jsonNumberAfter(stats, "\"counters\"", "reloc_time_from_first_frame_s");
   const livo::test::Ran ev = livo::test::runSplit(
       bin("livo-eval") + " --json --gt " + (dir / "second_gt.tum").string() + " --est " +
           (dir / "run2" / "trajectory_map.tum").string() + " --align-like " + (dir / "run1" / "trajectory_map.tum").string() +
@@ -143,16 +143,24 @@ TEST(LivoRunLoop, ASecondRunLocalisesInTheSavedMapOfTheFirst) {
   EXPECT_NE(ev.out.find("\"alignment_fixed\": true"), std::string::npos) << ev.out;
   const double mean = livo::test::jsonNumberAfter(ev.out, "{", "ate_mean_m");
   const double max = livo::test::jsonNumberAfter(ev.out, "{", "ate_max_m");
-  std::printf("[ second run ] localised %.2f s after the first frame; map-frame error without aligning it: mean %.2f cm, "
+  std::printf("[ second run ] localised %.2f s after the log's first frame; map-frame error without aligning it: mean %.2f cm, "
               "max %.2f cm\n",
               to_localise, 100 * mean, 100 * max);
-  // 2026-12-06: localised 0.50 s after the first frame (two agreeing tries at rest); mean 1.28 cm, max
-  // 7.4 cm (in the first turn). The target: within 3 s, mean <= 10 cm. Bounds about twice.
+  // 2026-12-06: localised 1.50 s after the log's first frame (1.0 s of initialisation at rest, then two
+  // agreeing tries 0.5 s apart); mean 1.28 cm, max 7.4 cm (in the first turn). The target:
+  // within 3 s, mean <= 10 cm. Bounds about twice.
   EXPECT_GE(to_localise, 0.0);
-  EXPECT_LE(to_localise, 1.0);
+  EXPECT_LE(to_localise, 3.0);
   EXPECT_LE(mean, 0.026);
   EXPECT_LE(max, 0.15);
 
+  // --prior-map with --loop: refused (exit 2) naming both.
+  const livo::test::Ran both = livo::test::runSplit(bin("livo-run") + " " + (dir / "second.lcm").string() + " --config " +
+                                                        (dir / "second_rig.yaml").string() + " --out " +
+                                                        (dir / "both").string() + " --prior-map " + site + " --loop",
+                                                    dir);
+  EXPECT_EQ(both.rc, 2);
+  EXPECT_NE(both.err.find("--prior-map with --loop"), std::string::npos) << both.err;
   // A site map that is not there: exit 1 naming it.
   const livo::test::Ran bad = livo::test::runSplit(bin("livo-run") + " " + (dir / "second.lcm").string() + " --config " +
                                                        (dir / "second_rig.yaml").string() + " --out " +

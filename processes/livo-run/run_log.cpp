@@ -121,6 +121,7 @@ class PriorMapRun {
 
   /// Returns what to tell the user about this frame ("" when nothing).
   std::string add(const Frame& frame, const FrameResult& r) {
+    if (first_frame_ < 0) first_frame_ = frame.utime;
     if (!r.lio.initialized) return {};
     const Pose T = r.lio.state.pose();
     const RelocaliseStep st = reloc_.add(frame.utime, T, [&] {
@@ -158,8 +159,20 @@ class PriorMapRun {
     for (const FramePose& f : frames_)
       if (const auto T_map = map.toMap(f.utime, f.T_odom)) tum.write(toSeconds(f.utime), *T_map);
   }
-  void addCounters(Counters& c) const { reloc_.addCounters(c); }
-  std::string summary() const { return "site map " + site_.dir() + ": " + reloc_.summary() + "; trajectory_map.tum\n"; }
+  void addCounters(Counters& c) const {
+    reloc_.addCounters(c);
+    // From the log's first frame (the relocaliser counts from the first frame with a pose).
+    c["reloc_time_from_first_frame_s"] = reloc_.localised() ? toSeconds(reloc_.firstLocalised() - first_frame_) : -1.0;
+  }
+  std::string summary() const {
+    std::string s = "site map " + site_.dir() + ": " + reloc_.summary();
+    if (reloc_.localised()) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, " (%.2f s after the log's first frame)", toSeconds(reloc_.firstLocalised() - first_frame_));
+      s += buf;
+    }
+    return s + "; trajectory_map.tum\n";
+  }
 
  private:
   struct FramePose {
@@ -169,6 +182,7 @@ class PriorMapRun {
   SiteMap site_;
   Relocaliser reloc_;
   std::vector<FramePose> frames_;
+  Utime first_frame_ = -1;
 };
 
 /// What happens with each frame result: its points into map.pcd (camera gray where an image saw the
