@@ -38,12 +38,7 @@ DriftedRun runDrifted(const sim::SimScenario& sc, LoopConfig cfg) {
   std::vector<Pose> truth_of_node, odom_of_node;
   for (std::int64_t j = 0; j < scans; ++j) {
     const Pose truth = s.T_world_imu(s.lidarUtime(j));
-    if (j > 0) {
-      Pose step = prev_truth.inverse() * truth;
-      step.translation() *= 1.005;
-      step.linear() = Eigen::AngleAxisd(0.004 * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix() * step.linear();
-      odom = odom * step;
-    }
+    if (j > 0) odom = odom * test::driftedStep(prev_truth, truth);
     prev_truth = truth;
     const Pose drift = odom * truth.inverse();  // odometry frame <- world, at this scan
     const LoopStep st = closer.add(s.lidarUtime(j), odom, [&] {

@@ -88,12 +88,7 @@ SecondRun secondRun(const std::string& site_dir, double duration_s, double budge
   const auto scans = static_cast<std::int64_t>(duration_s * sc.lidar.rate_hz) - 1;
   for (std::int64_t j = 0; j < scans; ++j) {
     const Pose truth = s.T_world_imu(s.lidarUtime(j));
-    if (j > 0) {
-      Pose step = prev_truth.inverse() * truth;
-      step.translation() *= 1.005;
-      step.linear() = Eigen::AngleAxisd(0.004 * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix() * step.linear();
-      odom = odom * step;
-    }
+    if (j > 0) odom = odom * test::driftedStep(prev_truth, truth);
     prev_truth = truth;
     const Pose to_odom = odom * truth.inverse();
     const RelocaliseStep st = reloc.add(s.lidarUtime(j), odom, [&] {

@@ -47,12 +47,7 @@ std::vector<SentFrame> driftedFrames(double duration_s) {
   Pose odom = s.T_world_imu(s.lidarUtime(0)), prev_truth = odom;
   for (std::int64_t j = 0; j < scans; ++j) {
     const Pose truth = s.T_world_imu(s.lidarUtime(j));
-    if (j > 0) {
-      Pose step = prev_truth.inverse() * truth;
-      step.translation() *= 1.005;
-      step.linear() = Eigen::AngleAxisd(0.004 * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix() * step.linear();
-      odom = odom * step;
-    }
+    if (j > 0) odom = odom * test::driftedStep(prev_truth, truth);
     prev_truth = truth;
     SentFrame f;
     f.truth = truth;
@@ -89,6 +84,25 @@ LoopConfig loopConfig() {
   return cfg;
 }
 
+/// The frames as the estimator publishes them (odometry, scan when it has points, stats), each drained.
+void publishFrames(LcmNode& lcm, const ChannelConfig& ch, const std::vector<SentFrame>& frames) {
+  for (const SentFrame& f : frames) {
+    lcm.publish(ch.odometry, toMsg(f.odom));
+    if (!f.scan.points.empty()) lcm.publish(ch.registered_scan, toMsg(f.scan));
+    EstimatorStats st;
+    st.utime = f.odom.utime;
+    lcm.publish(ch.estimator_stats, toMsg(st));
+    lcm.drain();
+  }
+}
+
+/// Points of a frame's scan in double precision (what the LoopCloser takes).
+std::vector<Vec3> scanPoints(const SentFrame& f) {
+  std::vector<Vec3> pts;
+  for (const Eigen::Vector3f& p : f.scan.points) pts.push_back(p.cast<double>());
+  return pts;
+}
+
 double rmsError(const Trajectory& est, const std::vector<SentFrame>& fr) {
   double s = 0;
   std::size_t n = 0;
@@ -110,11 +124,7 @@ TEST(LoopNode, ExporterWritesTheMapFrameOfTheLoopCloserRunDirectly) {
   // The direct composition (livo-run --loop): LoopCloser on the decoded poses and the float points.
   LoopCloser direct(loopConfig());
   for (const SentFrame& f : fr)
-    direct.add(f.odom.utime, f.odom.state.pose(), [&] {
-      std::vector<Vec3> pts;
-      for (const Eigen::Vector3f& p : f.scan.points) pts.push_back(p.cast<double>());
-      return pts;
-    });
+    direct.add(f.odom.utime, f.odom.state.pose(), [&] { return scanPoints(f); });
   direct.finish();
   MapFrameTrajectory expected;
   ASSERT_EQ(expected.apply(direct.correctionMessage(true, true)), "");
@@ -130,14 +140,7 @@ TEST(LoopNode, ExporterWritesTheMapFrameOfTheLoopCloserRunDirectly) {
     ++corrections;
     return Validation::ok();
   });
-  for (const SentFrame& f : fr) {
-    lcm.publish(ch.odometry, toMsg(f.odom));
-    if (!f.scan.points.empty()) lcm.publish(ch.registered_scan, toMsg(f.scan));
-    EstimatorStats st;
-    st.utime = f.odom.utime;
-    lcm.publish(ch.estimator_stats, toMsg(st));
-    lcm.drain();
-  }
+  publishFrames(lcm, ch, fr);
   lcm.publish(ch.odometry, toMsg(fr[fr.size() / 2].odom));  // a late frame: dropped
   lcm.drain();
   loop.finish();
@@ -185,11 +188,7 @@ TEST(LoopNode, LocalisesInASiteMapAndTheExporterWritesTheMapFrame) {
   const std::size_t split = 400;
   LoopCloser mapper(loopConfig());
   for (std::size_t i = 0; i < split; ++i)
-    mapper.add(fr[i].odom.utime, fr[i].odom.state.pose(), [&] {
-      std::vector<Vec3> pts;
-      for (const Eigen::Vector3f& p : fr[i].scan.points) pts.push_back(p.cast<double>());
-      return pts;
-    });
+    mapper.add(fr[i].odom.utime, fr[i].odom.state.pose(), [&] { return scanPoints(fr[i]); });
   mapper.finish();
   const std::string site_dir = test::tempDir("loop_node_site");
   saveSiteMap(site_dir, mapper, loopConfig().descriptor, 100.0);
@@ -208,11 +207,7 @@ TEST(LoopNode, LocalisesInASiteMapAndTheExporterWritesTheMapFrame) {
   SiteMap direct_site(site_dir, 64.0, loopConfig().descriptor);
   Relocaliser direct(loopConfig(), direct_site);
   for (const SentFrame& f : second)
-    direct.add(f.odom.utime, f.odom.state.pose(), [&] {
-      std::vector<Vec3> pts;
-      for (const Eigen::Vector3f& p : f.scan.points) pts.push_back(p.cast<double>());
-      return pts;
-    });
+    direct.add(f.odom.utime, f.odom.state.pose(), [&] { return scanPoints(f); });
   ASSERT_TRUE(direct.localised());
   MapFrameTrajectory expected;
   ASSERT_EQ(expected.apply(direct.anchors()), "");
@@ -223,14 +218,7 @@ TEST(LoopNode, LocalisesInASiteMapAndTheExporterWritesTheMapFrame) {
   ExporterNode exporter(lcm, ch, MapExportConfig{}, dir, nullptr);
   SiteMap site(site_dir, 64.0, loopConfig().descriptor);
   LoopNode loop(lcm, ch, loopConfig(), nullptr, &site);
-  for (const SentFrame& f : second) {
-    lcm.publish(ch.odometry, toMsg(f.odom));
-    if (!f.scan.points.empty()) lcm.publish(ch.registered_scan, toMsg(f.scan));
-    EstimatorStats st;
-    st.utime = f.odom.utime;
-    lcm.publish(ch.estimator_stats, toMsg(st));
-    lcm.drain();
-  }
+  publishFrames(lcm, ch, second);
   loop.finish();
   lcm.drain();
   exporter.finish();

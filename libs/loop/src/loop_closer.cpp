@@ -79,16 +79,9 @@ MapCorrection LoopCloser::correctionMessage(bool all, bool final) const {
 }
 
 void LoopCloser::addCounters(std::map<std::string, double>& c) const {
-  const LoopCheckCounts& n = checks();
+  checks().addCounters("loop", c);
   c["loop_keyframes"] = double(graph_.size());
   c["loop_candidates"] = double(totals_.candidates);
-  c["loop_checks"] = double(n.total());
-  c["loop_accepted"] = double(n.accepted);
-  c["loop_rejected_too_few_points"] = double(n.too_few_points);
-  c["loop_rejected_no_convergence"] = double(n.no_convergence);
-  c["loop_rejected_low_overlap"] = double(n.low_overlap);
-  c["loop_rejected_high_residual"] = double(n.high_residual);
-  c["loop_rejected_inconsistent"] = double(n.inconsistent);
   c["loop_graph_solves"] = double(totals_.solves);
   c["loop_points_held"] = double(points_held_);
   c["loop_point_bytes"] = double(store_.memoryBytes());

@@ -117,6 +117,16 @@ LoopCheck LoopVerifier::finish(LoopCheck c) {
   return c;
 }
 
+void LoopCheckCounts::addCounters(const std::string& prefix, std::map<std::string, double>& c) const {
+  c[prefix + "_checks"] = double(total());
+  c[prefix + "_accepted"] = double(accepted);
+  c[prefix + "_rejected_too_few_points"] = double(too_few_points);
+  c[prefix + "_rejected_no_convergence"] = double(no_convergence);
+  c[prefix + "_rejected_low_overlap"] = double(low_overlap);
+  c[prefix + "_rejected_high_residual"] = double(high_residual);
+  c[prefix + "_rejected_inconsistent"] = double(inconsistent);
+}
+
 LoopCheck LoopVerifier::verify(const std::vector<Vec3>& cand_points, const std::vector<Vec3>& query_points,
                                double yaw_guess, const Pose& T_odom, double path_between_m) {
   LoopCheck c;

@@ -163,18 +163,12 @@ std::string Relocaliser::summary() const {
 }
 
 void Relocaliser::addCounters(std::map<std::string, double>& c) const {
-  const LoopCheckCounts& n = checks();
+  checks().addCounters("reloc", c);
   c["reloc_site_keyframes"] = double(map_.size());
   c["reloc_localised"] = localised_ ? 1.0 : 0.0;
   c["reloc_time_to_localise_s"] = localised_ ? toSeconds(first_localised_ - first_frame_) : -1.0;
   c["reloc_tries"] = double(attempts_);
   c["reloc_anchors"] = double(anchors_.size());
-  c["reloc_checks"] = double(n.total());
-  c["reloc_rejected_too_few_points"] = double(n.too_few_points);
-  c["reloc_rejected_no_convergence"] = double(n.no_convergence);
-  c["reloc_rejected_low_overlap"] = double(n.low_overlap);
-  c["reloc_rejected_high_residual"] = double(n.high_residual);
-  c["reloc_rejected_inconsistent"] = double(n.inconsistent);
   c["reloc_left_map"] = double(left_map_);
   c["reloc_matches_gated"] = double(gated_);
   c["reloc_tile_reads"] = double(map_.tileReads());

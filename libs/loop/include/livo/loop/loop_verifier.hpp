@@ -10,6 +10,8 @@
 #include "livo/common/so3.hpp"
 #include "livo/loop/place_descriptor.hpp"
 
+#include <map>
+#include <string>
 #include <vector>
 
 namespace livo {
@@ -59,6 +61,8 @@ struct LoopCheck {
 struct LoopCheckCounts {
   int accepted = 0, too_few_points = 0, no_convergence = 0, low_overlap = 0, high_residual = 0, inconsistent = 0;
   int total() const { return accepted + too_few_points + no_convergence + low_overlap + high_residual + inconsistent; }
+  /// PREFIX_checks, PREFIX_accepted and PREFIX_rejected_<reason> into stats.json counters.
+  void addCounters(const std::string& prefix, std::map<std::string, double>& c) const;
 };
 
 class LoopVerifier {
