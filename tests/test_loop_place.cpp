@@ -61,6 +61,38 @@ TEST(PlaceDescriptor, ATurnAboutZIsFoundAsTheYawAndLeavesTheRingKey) {
   }
 }
 
+// A narrow field of view (a 70 deg Avia fills about 12 of the 60 sectors): two views of one place turned
+// by less than the field of view compare on the sectors both see and give the yaw; views that share no
+// sector compare to nothing.
+TEST(PlaceDescriptor, ANarrowFieldOfViewStillGivesTheYaw) {
+  const sim::Simulator s(revisitScenario());
+  const std::int64_t j = 100;
+  const Pose T = s.T_world_imu(s.lidarUtime(j));
+  const std::vector<Vec3> local = test::inKeyframe(worldScan(s, j), T);
+  const PlaceDescriptorConfig cfg;
+  auto window = [&](double centre_deg) {  // the points within +-35 deg of an azimuth
+    std::vector<Vec3> out;
+    for (const Vec3& p : local)
+      if (std::abs(wrapAngle(std::atan2(p.y(), p.x()) - centre_deg * M_PI / 180.0)) < 35.0 * M_PI / 180.0) out.push_back(p);
+    return out;
+  };
+  const PlaceDescriptor ref = PlaceDescriptor::compute(window(0.0), cfg);
+  ASSERT_LT(ref.occupiedSectors(), cfg.sectors / 4) << "fewer sectors than the 360 deg minimum of a quarter";
+  for (const double yaw_deg : {12.0, -24.0, 30.0}) {
+    SCOPED_TRACE("yaw " + std::to_string(yaw_deg) + " deg");
+    // The same view from a sensor turned by -yaw: its points turned by +yaw.
+    const PlaceMatch turn = PlaceDescriptor::compute(turned(window(0.0), yaw_deg * M_PI / 180.0), cfg).match(ref);
+    EXPECT_LT(turn.distance, 0.25);
+    EXPECT_LT(std::abs(wrapAngle(turn.yaw_rad - yaw_deg * M_PI / 180.0)), 0.5 * 2.0 * M_PI / cfg.sectors)
+        << "found " << turn.yaw_rad * 180 / M_PI;
+    // Looking yaw further round from the same spot: partly other points, the shared sectors agree.
+    const PlaceMatch look = PlaceDescriptor::compute(window(yaw_deg), cfg).match(ref);
+    EXPECT_LT(look.distance, 0.3);
+    EXPECT_LT(std::abs(wrapAngle(look.yaw_rad)), 0.5 * 2.0 * M_PI / cfg.sectors);
+  }
+  EXPECT_GT(PlaceDescriptor::compute(window(180.0), cfg).match(ref).distance, 0.3) << "the view behind is another place";
+}
+
 TEST(PlaceDescriptor, ScansFromOtherPlacesAreFarAndEmptyScansCompareToNothing) {
   const sim::Simulator s(revisitScenario());
   const PlaceDescriptorConfig cfg;

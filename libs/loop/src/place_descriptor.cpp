@@ -152,8 +152,10 @@ double PlaceDescriptor::distanceAtShift(const PlaceDescriptor& c, int shift, int
 PlaceMatch PlaceDescriptor::match(const PlaceDescriptor& c) const {
   PlaceMatch m;
   if (c.rings_ != rings_ || c.sectors_ != sectors_ || rings_ == 0) return m;
-  // Too few sectors seen by both leave nothing to compare: a quarter of the circle at least.
-  const int min_compared = std::max(2, sectors_ / 4);
+  // Too few sectors seen by both leave nothing to compare: a quarter of the circle at least, or, for a
+  // sensor that sees less (a 70 deg Avia fills about 12 of 60 sectors), half of what the narrower of the
+  // two sees.
+  const int min_compared = std::max(2, std::min(sectors_ / 4, std::min(occupiedSectors(), c.occupiedSectors()) / 2));
   std::vector<double> dist(static_cast<std::size_t>(sectors_), 1.0);
   int best = -1;
   for (int k = 0; k < sectors_; ++k) {

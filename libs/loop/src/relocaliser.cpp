@@ -36,6 +36,7 @@ bool Relocaliser::check(const Pose& K, const std::vector<Vec3>& local, bool boun
   const std::vector<PlaceCandidate> cands = places_.search(d, kQueryPath);
   st.candidates += static_cast<int>(cands.size());
   const double path_since = selector_.pathLength() - path_at_match_m_;
+  bool found = false;
   for (const PlaceCandidate& c : cands) {
     if (st.checked >= cfg_.verify_candidates) break;
     const SiteKeyframe& k = map_.keyframe(c.id);
@@ -46,11 +47,25 @@ bool Relocaliser::check(const Pose& K, const std::vector<Vec3>& local, bool boun
     const LoopCheck lc = verifier_.verify(map_.points(c.id), local, c.match.yaw_rad, predicted,
                                           bounded ? path_since : std::numeric_limits<double>::max() / 4);
     if (!lc.accepted) continue;
-    H = k.T_map * lc.T_cand_query * K.inverse();
-    st.map_keyframe = c.id;
-    return true;
+    const Pose H_c = k.T_map * lc.T_cand_query * K.inverse();
+    if (bounded) {  // the prediction already singles out the place
+      H = H_c;
+      st.map_keyframe = c.id;
+      return true;
+    }
+    // Not localised: every candidate is checked; two that verify at different places (a symmetric
+    // room, look-alike blocks) make the try ambiguous, and it counts for nothing.
+    if (found && !agree(H, H_c)) {
+      ++ambiguous_;
+      return false;
+    }
+    if (!found) {
+      H = H_c;
+      st.map_keyframe = c.id;
+      found = true;
+    }
   }
-  return false;
+  return found;
 }
 
 RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan) {
@@ -58,6 +73,14 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   if (first_frame_ < 0) first_frame_ = t;
   const bool key = selector_.offer(T_odom_body);
   const bool try_now = localised_ ? key : (key || ++frames_since_attempt_ >= cfg_.relocalise_every_frames);
+  // The query: this frame's points and those of the frames before it within loop.relocalise_query_s and
+  // loop.keyframe_distance_m of travel (a narrow-FOV sensor at rest fills its view over a second).
+  if (cfg_.relocalise_query_s > 0.0) {
+    recent_.push_back({t, selector_.pathLength(), thinPoints(scan(), cfg_.keyframe_points_m)});
+    while (!recent_.empty() && (toSeconds(t - recent_.front().utime) > cfg_.relocalise_query_s ||
+                                selector_.pathLength() - recent_.front().path_m > cfg_.keyframes.distance_m))
+      recent_.pop_front();
+  }
   if (!try_now) return st;
   frames_since_attempt_ = 0;
   Stopwatch watch;
@@ -65,21 +88,22 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   ++attempts_;
   const Pose K = keyframeFrame(T_odom_body);
   const Pose K_inv = K.inverse();
-  std::vector<Vec3> local = scan();
+  std::vector<Vec3> local;
+  if (cfg_.relocalise_query_s > 0.0) {
+    for (const RecentScan& r : recent_) local.insert(local.end(), r.points.begin(), r.points.end());
+  } else {
+    local = scan();
+  }
   for (Vec3& p : local) p = K_inv * p;
 
   Pose H = Pose::Identity();
   bool ok = check(K, local, localised_, st, H);
   if (ok && !localised_) {
     // Localise when two tries at different times agree on where the odometry's frame sits.
-    if (have_hypothesis_ && hypothesis_t_ != t) {
-      const Pose diff = hypothesis_.inverse() * H;
-      if (diff.translation().norm() < cfg_.relocalise_agree_m &&
-          rotationAngle(diff.linear()) < cfg_.relocalise_agree_deg * M_PI / 180.0) {
-        localised_ = true;
-        first_localised_ = t;
-        st.localised_now = true;
-      }
+    if (have_hypothesis_ && hypothesis_t_ != t && agree(hypothesis_, H)) {
+      localised_ = true;
+      first_localised_ = t;
+      st.localised_now = true;
     }
     hypothesis_ = H;
     hypothesis_t_ = t;
@@ -107,6 +131,12 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   st.ms = watch.elapsedMs();
   ms_ += st.ms;
   return st;
+}
+
+bool Relocaliser::agree(const Pose& a, const Pose& b) const {
+  const Pose diff = a.inverse() * b;
+  return diff.translation().norm() < cfg_.relocalise_agree_m &&
+         rotationAngle(diff.linear()) < cfg_.relocalise_agree_deg * M_PI / 180.0;
 }
 
 bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
@@ -171,6 +201,7 @@ void Relocaliser::addCounters(std::map<std::string, double>& c) const {
   c["reloc_anchors"] = double(anchors_.size());
   c["reloc_left_map"] = double(left_map_);
   c["reloc_matches_gated"] = double(gated_);
+  c["reloc_tries_ambiguous"] = double(ambiguous_);
   c["reloc_tile_reads"] = double(map_.tileReads());
   c["reloc_tiles_held"] = double(map_.tilesHeld());
   c["reloc_tile_bytes_held"] = double(map_.bytesHeld());

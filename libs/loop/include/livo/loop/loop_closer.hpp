@@ -43,6 +43,9 @@ struct LoopConfig {
   double site_tile_m = 100.0;      ///< loop.site_tile_m: edge of a site map's point tiles
   double site_budget_mb = 64.0;    ///< loop.site_budget_mb: tiles' points held while localising (0: all)
   int relocalise_every_frames = 5; ///< loop.relocalise_every_frames: before localised, try every Nth frame
+  /// loop.relocalise_query_s: a try's query gathers the scans of this many seconds (and at most
+  /// loop.keyframe_distance_m of travel); 0: the frame's scan alone
+  double relocalise_query_s = 0.0;
   double relocalise_agree_m = 0.5;    ///< loop.relocalise_agree_m: two tries agree within this ...
   double relocalise_agree_deg = 2.0;  ///< loop.relocalise_agree_deg: ... and this, to localise
   /// loop.outside_map_after_m: no map keyframe verified over this much travel: outside the map

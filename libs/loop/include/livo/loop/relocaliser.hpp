@@ -1,8 +1,8 @@
 // Localising in a saved site map (site_map.hpp) with no initial pose: the odometry runs in its own
 // frame; the relocaliser finds where that frame sits in the map's. Until it knows, it tries the current
 // scan every few frames against the whole map (place search, then the geometric check of loop closure
-// without the odometry's bound); two checks at different times whose odometry-to-map transforms agree
-// localise it. From then on every keyframe is checked against the map keyframes the current transform
+// without the odometry's bound; a try where candidates verify at different places is ambiguous and
+// counts for nothing); two tries at different times whose odometry-to-map transforms agree localise it. From then on every keyframe is checked against the map keyframes the current transform
 // predicts (the odometry's drift bound since the last match applies), and each match is fused into the
 // transform (weights from the odometry's drift since the last anchor, loop.odometry_sigma_*, against the
 // match's, loop.loop_sigma_*; a match beyond 3 sigma is refused). Without a match for loop.outside_map_after_m of travel it reports that the robot left the
@@ -14,6 +14,7 @@
 #include "livo/loop/map_frame.hpp"
 #include "livo/loop/site_map.hpp"
 
+#include <deque>
 #include <functional>
 #include <string>
 #include <vector>
@@ -34,8 +35,8 @@ struct RelocaliseStep {
 class Relocaliser {
  public:
   Relocaliser(const LoopConfig& cfg, SiteMap& map);
-  /// Takes the next odometry pose; `scan` is called for the frame's registered points (odometry frame)
-  /// when the frame is tried against the map.
+  /// Takes the next odometry pose; `scan` is called for the frame's registered points (odometry frame):
+  /// every frame when queries gather loop.relocalise_query_s of scans, else when the frame is tried.
   RelocaliseStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
 
   bool localised() const { return localised_; }
@@ -59,6 +60,8 @@ class Relocaliser {
   /// Fuses a match (T_map_odom `H`) at keyframe frame K into the current transform; false when it is
   /// farther from the prediction than 3 sigma (refused, counted).
   bool fuse(const Pose& K, const Pose& H);
+  /// Two odometry-to-map transforms within loop.relocalise_agree_m and loop.relocalise_agree_deg.
+  bool agree(const Pose& a, const Pose& b) const;
 
   LoopConfig cfg_;
   SiteMap& map_;
@@ -71,10 +74,16 @@ class Relocaliser {
   Pose T_map_odom_ = Pose::Identity();
   double path_at_match_m_ = 0.0;
   double var_t_ = 0.0, var_r_ = 0.0;  ///< variance of the current transform at the last anchor (m^2, rad^2)
-  int gated_ = 0;
+  int gated_ = 0, ambiguous_ = 0;
   int frames_since_attempt_ = 0, attempts_ = 0, left_map_ = 0;
   Utime first_frame_ = -1, first_localised_ = -1;
   std::vector<KeyframePose> anchors_;
+  struct RecentScan {
+    Utime utime;
+    double path_m;
+    std::vector<Vec3> points;  ///< odometry frame, thinned to loop.keyframe_points_m
+  };
+  std::deque<RecentScan> recent_;
   double ms_ = 0.0;
 };
 
