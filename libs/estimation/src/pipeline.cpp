@@ -19,4 +19,8 @@ std::size_t Pipeline::processReady(const FrameCallback& cb) {
   return n;
 }
 
+void Pipeline::insertPriorPoints(const std::vector<PointWithCov>& points) {
+  if (!points.empty()) map_->lidar().insert(points);
+}
+
 }  // namespace livo

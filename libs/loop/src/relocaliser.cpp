@@ -167,6 +167,22 @@ bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
   return true;
 }
 
+std::vector<Relocaliser::MapPatch> Relocaliser::mapPointsNear(const Pose& T_odom_body, double radius_m) {
+  std::vector<MapPatch> out;
+  if (!localised_) return out;
+  handed_out_.resize(map_.size(), false);
+  const Vec3 robot = (T_map_odom_ * T_odom_body).translation();
+  const Pose T_odom_map = T_map_odom_.inverse();
+  for (int i = 0; i < static_cast<int>(map_.size()); ++i) {
+    if (handed_out_[std::size_t(i)]) continue;
+    const SiteKeyframe& k = map_.keyframe(i);
+    if ((k.T_map.translation() - robot).norm() > radius_m) continue;
+    handed_out_[std::size_t(i)] = true;
+    out.push_back(MapPatch{i, T_odom_map * k.T_map, map_.points(i)});
+  }
+  return out;
+}
+
 MapCorrection Relocaliser::anchors() const {
   MapCorrection c;
   c.keyframes = anchors_;

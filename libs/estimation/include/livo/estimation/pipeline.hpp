@@ -42,6 +42,9 @@ class Pipeline {
   const HybridMap& map() const { return *map_; }
   /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json
   /// map {local_voxels, visual_points_local, visual_points_longterm, bytes}.
+  /// Points of a prior map (a site map's keyframes near the robot, in the odometry frame) into the LiDAR
+  /// map, between frames: their planes serve the next frames' LiDAR updates.
+  void insertPriorPoints(const std::vector<PointWithCov>& points);
   HybridMapStats mapStats() const { return map_->stats(); }
   /// Frame images whose size does not match the camera calibration (never used by the visual update).
   std::size_t imagesWrongSize() const { return frames_.imagesWrongSize(); }

@@ -46,6 +46,10 @@ struct LoopConfig {
   /// loop.relocalise_query_s: a try's query gathers the scans of this many seconds (and at most
   /// loop.keyframe_distance_m of travel); 0: the frame's scan alone
   double relocalise_query_s = 0.0;
+  /// loop.prior_map_planes: once localised, the site map's keyframe points within the descriptor's range
+  /// of the robot go into the odometry's LiDAR map (each keyframe once), so that the map's planes serve
+  /// the LiDAR update (livo-run --prior-map)
+  bool prior_map_planes = true;
   double relocalise_agree_m = 0.5;    ///< loop.relocalise_agree_m: two tries agree within this ...
   double relocalise_agree_deg = 2.0;  ///< loop.relocalise_agree_deg: ... and this, to localise
   /// loop.outside_map_after_m: no map keyframe verified over this much travel: outside the map
