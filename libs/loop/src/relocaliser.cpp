@@ -178,6 +178,13 @@ std::vector<Relocaliser::MapPatch> Relocaliser::mapPointsNear(const Pose& T_odom
     const SiteKeyframe& k = map_.keyframe(i);
     if ((k.T_map.translation() - robot).norm() > radius_m) continue;
     handed_out_[std::size_t(i)] = true;
+    // One keyframe per cell of loop.keyframe_distance_m: a map made of several laps holds each place
+    // several times, and one view of it is enough for its planes.
+    const double cell = std::max(0.1, cfg_.keyframes.distance_m);
+    const Vec3& q = k.T_map.translation();
+    const std::array<std::int64_t, 3> key{std::int64_t(std::floor(q.x() / cell)), std::int64_t(std::floor(q.y() / cell)),
+                                          std::int64_t(std::floor(q.z() / cell))};
+    if (!seeded_cells_.insert(key).second) continue;
     out.push_back(MapPatch{i, T_odom_map * k.T_map, map_.points(i)});
   }
   return out;

@@ -48,7 +48,7 @@ struct LoopConfig {
   double relocalise_query_s = 0.0;
   /// loop.prior_map_planes: once localised, the site map's keyframe points within the descriptor's range
   /// of the robot go into the odometry's LiDAR map (each keyframe once), so that the map's planes serve
-  /// the LiDAR update (livo-run --prior-map)
+  /// the LiDAR update (livo-run --prior-map); one keyframe per cell of keyframe_distance_m
   bool prior_map_planes = true;
   double relocalise_agree_m = 0.5;    ///< loop.relocalise_agree_m: two tries agree within this ...
   double relocalise_agree_deg = 2.0;  ///< loop.relocalise_agree_deg: ... and this, to localise

@@ -14,7 +14,10 @@
 #include "livo/loop/map_frame.hpp"
 #include "livo/loop/site_map.hpp"
 
+#include <array>
+#include <cstdint>
 #include <deque>
+#include <set>
 #include <functional>
 #include <string>
 #include <vector>
@@ -55,7 +58,8 @@ class Relocaliser {
     std::vector<Vec3> points;
   };
   /// Localised: the map keyframes within `radius_m` of the robot (odometry pose T_odom_body) not handed
-  /// out before; marks them handed out. Empty when not localised.
+  /// out before, one per cell of loop.keyframe_distance_m (a map of several laps holds each place several
+  /// times); marks them handed out. Empty when not localised.
   std::vector<MapPatch> mapPointsNear(const Pose& T_odom_body, double radius_m);
   int attempts() const { return attempts_; }
   int matches() const { return int(anchors_.size()); }
@@ -86,6 +90,7 @@ class Relocaliser {
   double var_t_ = 0.0, var_r_ = 0.0;  ///< variance of the current transform at the last anchor (m^2, rad^2)
   int gated_ = 0, ambiguous_ = 0;
   std::vector<bool> handed_out_;
+  std::set<std::array<std::int64_t, 3>> seeded_cells_;  ///< cells of loop.keyframe_distance_m handed out
   int frames_since_attempt_ = 0, attempts_ = 0, left_map_ = 0;
   Utime first_frame_ = -1, first_localised_ = -1;
   std::vector<KeyframePose> anchors_;
