@@ -8,11 +8,14 @@
 #include "livo/eval/tum.hpp"
 #include "livo/io/loop_messages.hpp"
 #include "livo/loop/loop_closer.hpp"
+#include "livo/loop/prior_seeder.hpp"
 #include "livo/loop/relocaliser.hpp"
 #include "livo/loop/site_map.hpp"
 #include "livo/process/exporter_node.hpp"
 #include "livo/process/lcm_node.hpp"
 #include "livo/process/loop_node.hpp"
+#include "livo/process/mapserver_node.hpp"
+#include "livo/io/map_messages.hpp"
 
 #include "loop_test_util.hpp"
 #include "process_test_files.hpp"
@@ -247,6 +250,74 @@ TEST(LoopNode, LocalisesInASiteMapAndTheExporterWritesTheMapFrame) {
   EXPECT_LT(worst, 1e-5);
   // 2026-12-06: 75 of 159 frames, 21 anchors, 0.369 m at most from the truth. Bound about twice.
   EXPECT_LT(err, 0.75) << "in the map's frame (the other odometry frame is 36 m and 40 deg away)";
+}
+
+// livo-mapserver --prior-map: no site map planes before livo-loop's first correction; after it, a query
+// near a mapped place inserts that place's keyframes (in the odometry frame the correction gives) and
+// the answer holds their planes, with no map update from any estimator.
+TEST(MapServerNode, ServesTheSiteMapsPlanesOnceLocalised) {
+  const std::vector<SentFrame>& fr = frames();
+  LoopCloser mapper(loopConfig());
+  for (std::size_t i = 0; i < 200; ++i)
+    mapper.add(fr[i].odom.utime, fr[i].odom.state.pose(), [&] { return scanPoints(fr[i]); });
+  const std::string site_dir = test::tempDir("mapserver_site");
+  saveSiteMap(site_dir, mapper, loopConfig().descriptor, 100.0);
+  SiteMap site(site_dir, 64.0, loopConfig().descriptor);
+  PriorMapSeeder seeder(site, loopConfig());
+
+  LcmNode lcm("memq://", "test", nullptr);
+  const ChannelConfig ch;
+  MapService service(HybridMapConfig{}, VoxelMapConfig{}, VisualMapConfig{});
+  MapServerNode server(lcm, service, ch, nullptr);
+  server.setPriorMap(&seeder);
+  std::vector<Submap> answers;
+  lcm.subscribeStruct<livo::submap_t, Submap>(ch.submap, [&](Submap& s) { answers.push_back(s); });
+
+  // The odometry frame of this run: the map's turned by 40 deg and 30 m away (T_map_odom its inverse).
+  Pose other = Pose::Identity();
+  other.linear() = Eigen::AngleAxisd(40.0 * M_PI / 180.0, Vec3::UnitZ()).toRotationMatrix();
+  other.translation() = Vec3(30, -20, 1);
+  const Pose at = other * fr[100].odom.state.pose();  // a mapped place, in this run's odometry frame
+  auto query = [&](std::int64_t id) {
+    MapQuery q;
+    q.utime = fr[100].odom.utime + id;
+    q.request_id = id;
+    q.T_world_imu = at;
+    q.radius_m = 20.0;
+    const double v = VoxelMapConfig{}.voxel_size_m;  // the root voxels around the robot, down to the ground
+    for (int dx = -3; dx <= 3; ++dx)
+      for (int dy = -3; dy <= 3; ++dy)
+        for (int dz = -5; dz <= 0; ++dz)
+          q.keys.push_back(VoxelKey::fromPoint(at.translation() + Vec3(dx, dy, dz) * v, v));
+    lcm.publish(ch.map_query, toMsg(q));
+    lcm.drain();
+  };
+  query(1);
+  ASSERT_EQ(answers.size(), 1u);
+  EXPECT_TRUE(answers[0].planes.empty()) << "an empty map before livo-loop localised";
+  EXPECT_EQ(server.counters().prior_points, 0u);
+
+  MapCorrection c;
+  c.utime = fr[100].odom.utime;
+  c.T_map_odom = other.inverse();
+  c.keyframes_total = 1;
+  c.keyframes = {{c.utime, Pose::Identity(), Pose::Identity()}};
+  lcm.publish(ch.map_correction, toMsg(c));
+  lcm.drain();
+  query(2);
+  ASSERT_EQ(answers.size(), 2u);
+  std::printf("site map served: %zu keyframes, %llu points; answer with %zu planes\n", seeder.keyframesHanded(),
+              static_cast<unsigned long long>(server.counters().prior_points), answers[1].planes.size());
+  EXPECT_GT(seeder.keyframesHanded(), 5u);
+  EXPECT_GT(answers[1].planes.size(), 10u);
+  // The planes are where the map's points are, in this run's frame: the ground under the robot.
+  bool ground = false;
+  for (const SubmapPlane& p : answers[1].planes)
+    ground = ground || (std::abs(p.plane.normal.z()) > 0.95 && std::abs(p.plane.center.z() - (at.translation().z() - 1.8)) < 0.5);
+  EXPECT_TRUE(ground) << "a level plane about 1.8 m under the sensor";
+  const std::uint64_t served = server.counters().prior_points;
+  query(3);
+  EXPECT_EQ(server.counters().prior_points, served) << "each keyframe once";
 }
 
 TEST(LoopNode, CorrectionsOfAnotherRunAreRefusedByTheExporter) {

@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
     std::cerr << "livo-loop: "
               << (end == LcmNode::SpinEnd::kIdle ? "no message for --idle-exit seconds"
                                                  : stopSignal() ? strsignal(stopSignal()) : "stop requested")
-              << ", final solve and correction\n";
+              << (site ? ", final correction\n" : ", final solve and correction\n");
     node.finish();
     if (!save_map.empty()) {
       saveSiteMap(save_map, *node.closer(), cfg.descriptor, cfg.site_tile_m);

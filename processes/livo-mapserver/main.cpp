@@ -1,5 +1,5 @@
 // livo-mapserver --config CFG.yaml [--lcm-url URL] [--idle-exit S] [--map-mode hybrid|global]
-//                [--memory-cap-mb N] [--map-file FILE] [--report-interval S] [--print-config]
+//                [--memory-cap-mb N] [--map-file FILE] [--prior-map DIR] [--report-interval S] [--print-config]
 //
 // Owns the map (local voxel plane map + visual maps; hybrid: sliding local cube and long-term visual
 // map, memory cap): answers LIVO_MAP_QUERY with LIVO_SUBMAP, applies LIVO_MAP_UPDATE, publishes
@@ -8,6 +8,8 @@
 #include "livo/common/config.hpp"
 #include "livo/estimation/pipeline.hpp"
 #include "livo/io/channels.hpp"
+#include "livo/loop/prior_seeder.hpp"
+#include "livo/loop/site_map.hpp"
 #include "livo/map/map_file.hpp"
 #include "livo/process/cli.hpp"
 #include "livo/process/lcm_node.hpp"
@@ -18,6 +20,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 using namespace livo;
 
@@ -28,7 +31,7 @@ int main(int argc, char** argv) {
                  "LIVO_MAP_STATS at 1 Hz. Stops on SIGINT / SIGTERM with a summary (saving --map-file).");
   ProcessArgs args;
   std::string map_mode = "hybrid";
-  std::string map_file;
+  std::string map_file, prior_map;
   double cap_mb = -1.0;
   double report_interval_s = 10.0;
   addProcessOptions(cl, args);
@@ -37,12 +40,16 @@ int main(int argc, char** argv) {
   cl.number("--memory-cap-mb", &cap_mb, "N", "memory cap of the map (0: none; overrides map.memory_cap_mb)", 0.0)
       .unit("MiB")
       .defaultText("config map.memory_cap_mb");
+  cl.text("--prior-map", &prior_map, "DIR",
+          "serve the planes of the site map DIR near the robot once livo-loop --prior-map DIR localised the odometry "
+          "in it (LIVO_MAP_CORRECTION)");
   cl.text("--map-file", &map_file, "FILE", "load the map from FILE at start (when it exists), save it there at exit");
   cl.number("--report-interval", &report_interval_s, "S", "progress on stderr every S s of message time (0: off)", 0.0)
       .unit("s");
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
 
   PipelineConfig pipe_cfg;
+  LoopConfig loop_cfg;
   ChannelConfig channels;
   std::string config_lines;
   try {
@@ -51,6 +58,8 @@ int main(int argc, char** argv) {
     pipe_cfg.load(root);
     channels.load(root.section("channels"));
     checkSectionsUsed(file, {"channels", "map", "voxel_map"});
+    loop_cfg.load(root.section("loop"), pipe_cfg.preprocess.max_range_m, pipe_cfg.lio.lio.range_noise_m,
+                  pipe_cfg.lio.lio.beam_noise_deg);
     config_lines = file.effectiveLines();
     if (args.print_config) {
       if (cap_mb >= 0) file.overrideEffective("map.memory_cap_mb", cap_mb);
@@ -79,6 +88,15 @@ int main(int argc, char** argv) {
                                                         double(lcm.limits().max_imu_per_frame)));
     MapServerNode node(lcm, service, channels, &std::cerr, 1.0, max_resume_imu);
     node.setConfigLines(config_lines);
+    std::optional<SiteMap> site;
+    std::optional<PriorMapSeeder> seeder;
+    if (!prior_map.empty()) {
+      site.emplace(prior_map, loop_cfg.site_budget_mb, loop_cfg.descriptor);
+      seeder.emplace(*site, loop_cfg);
+      node.setPriorMap(&*seeder);
+      std::cerr << "livo-mapserver: site map " << prior_map << " (" << site->size()
+                << " keyframes): its planes are served once livo-loop --prior-map localises\n";
+    }
     std::cerr << "livo-mapserver: " << map_mode << " map";
     if (service.map().stats().cap_bytes > 0) std::cerr << ", cap " << service.map().stats().cap_bytes / (1 << 20) << " MiB";
     std::cerr << "; " << channels.map_query << " -> " << channels.submap << ", " << channels.map_update << " on " << url

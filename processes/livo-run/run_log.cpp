@@ -10,7 +10,7 @@
 #include "livo/io/log.hpp"
 #include "livo/io/run_outputs.hpp"
 #include "livo/loop/relocaliser.hpp"
-#include "livo/map/point_cov.hpp"
+#include "livo/loop/prior_seeder.hpp"
 #include "livo/loop/site_map.hpp"
 #include "livo/process/scan_colour.hpp"
 
@@ -118,7 +118,8 @@ class LoopRun {
 class PriorMapRun {
  public:
   PriorMapRun(const LoopConfig& cfg, const std::string& dir, Pipeline& pipeline)
-      : cfg_(cfg), site_(dir, cfg.site_budget_mb, cfg.descriptor), reloc_(cfg, site_), pipeline_(pipeline) {}
+      : cfg_(cfg), site_(dir, cfg.site_budget_mb, cfg.descriptor), reloc_(cfg, site_), seeder_(site_, cfg),
+        pipeline_(pipeline) {}
 
   /// Returns what to tell the user about this frame ("" when nothing).
   std::string add(const Frame& frame, const FrameResult& r) {
@@ -132,7 +133,8 @@ class PriorMapRun {
       return world;
     });
     frames_.push_back({frame.utime, T});
-    if (cfg_.prior_map_planes) seedMap(T);
+    if (cfg_.prior_map_planes && reloc_.localised())
+      pipeline_.insertPriorPoints(seeder_.pointsNear(reloc_.correction(), T.translation()));
     char buf[200];
     if (st.localised_now) {
       std::snprintf(buf, sizeof buf, "livo-run: localised in the site map at t=%.3f s (map keyframe %d)",
@@ -154,23 +156,6 @@ class PriorMapRun {
     return {};
   }
 
-  /// The site map's keyframes near the robot into the LiDAR map (loop.prior_map_planes), with the
-  /// LiDAR's point covariance in their keyframe frames.
-  void seedMap(const Pose& T_odom_body) {
-    const auto patches = reloc_.mapPointsNear(T_odom_body, cfg_.descriptor.max_range_m);
-    if (patches.empty()) return;
-    std::vector<PointWithCov> pts;
-    for (const Relocaliser::MapPatch& m : patches) {
-      const Mat3 R = m.T_odom_key.linear();
-      for (const Vec3& p : m.points)
-        pts.push_back({m.T_odom_key * p,
-                       R * pointCovarianceBody(p, cfg_.verify.range_sigma_m, cfg_.verify.bearing_sigma_deg) * R.transpose()});
-    }
-    pipeline_.insertPriorPoints(pts);
-    seeded_keyframes_ += patches.size();
-    seeded_points_ += pts.size();
-  }
-
   void write(const std::string& dir) {
     MapFrameTrajectory map;
     map.apply(reloc_.anchors());
@@ -180,8 +165,8 @@ class PriorMapRun {
   }
   void addCounters(Counters& c) const {
     reloc_.addCounters(c);
-    c["reloc_prior_keyframes_inserted"] = double(seeded_keyframes_);
-    c["reloc_prior_points_inserted"] = double(seeded_points_);
+    c["reloc_prior_keyframes_inserted"] = double(seeder_.keyframesHanded());
+    c["reloc_prior_points_inserted"] = double(seeder_.pointsHanded());
     // From the log's first frame (the relocaliser counts from the first frame with a pose).
     c["reloc_time_from_first_frame_s"] = reloc_.localised() ? toSeconds(reloc_.firstLocalised() - first_frame_) : -1.0;
   }
@@ -203,10 +188,10 @@ class PriorMapRun {
   LoopConfig cfg_;
   SiteMap site_;
   Relocaliser reloc_;
+  PriorMapSeeder seeder_;
   Pipeline& pipeline_;
   std::vector<FramePose> frames_;
   Utime first_frame_ = -1;
-  std::size_t seeded_keyframes_ = 0, seeded_points_ = 0;
 };
 
 /// What happens with each frame result: its points into map.pcd (camera gray where an image saw the

@@ -167,29 +167,6 @@ bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
   return true;
 }
 
-std::vector<Relocaliser::MapPatch> Relocaliser::mapPointsNear(const Pose& T_odom_body, double radius_m) {
-  std::vector<MapPatch> out;
-  if (!localised_) return out;
-  handed_out_.resize(map_.size(), false);
-  const Vec3 robot = (T_map_odom_ * T_odom_body).translation();
-  const Pose T_odom_map = T_map_odom_.inverse();
-  for (int i = 0; i < static_cast<int>(map_.size()); ++i) {
-    if (handed_out_[std::size_t(i)]) continue;
-    const SiteKeyframe& k = map_.keyframe(i);
-    if ((k.T_map.translation() - robot).norm() > radius_m) continue;
-    handed_out_[std::size_t(i)] = true;
-    // One keyframe per cell of loop.keyframe_distance_m: a map made of several laps holds each place
-    // several times, and one view of it is enough for its planes.
-    const double cell = std::max(0.1, cfg_.keyframes.distance_m);
-    const Vec3& q = k.T_map.translation();
-    const std::array<std::int64_t, 3> key{std::int64_t(std::floor(q.x() / cell)), std::int64_t(std::floor(q.y() / cell)),
-                                          std::int64_t(std::floor(q.z() / cell))};
-    if (!seeded_cells_.insert(key).second) continue;
-    out.push_back(MapPatch{i, T_odom_map * k.T_map, map_.points(i)});
-  }
-  return out;
-}
-
 MapCorrection Relocaliser::anchors() const {
   MapCorrection c;
   c.keyframes = anchors_;

@@ -86,10 +86,29 @@ Validation MapServerNode::onResumeRequest(const livo::resume_request_t& m) {
   return Validation::ok();
 }
 
+void MapServerNode::setPriorMap(PriorMapSeeder* seeder) {
+  prior_ = seeder;
+  if (!prior_) return;
+  lcm_.subscribeStruct<livo::map_correction_t, MapCorrection>(channels_.map_correction, [this](MapCorrection& c) {
+    ++counters_.map_corrections;
+    if (c.keyframes_total == 0) return;  // not localised yet
+    if (!have_correction_ && log_) *log_ << "livo-mapserver: localised in the site map: serving its planes\n";
+    have_correction_ = true;
+    T_map_odom_ = c.T_map_odom;
+  });
+}
+
 Validation MapServerNode::onQuery(const livo::map_query_t& m) {
   MapQuery q;
   Validation v = fromMsg(m, q, lcm_.limits());
   if (!v) return v;
+  if (prior_ && have_correction_) {
+    const std::vector<PointWithCov> pts = prior_->pointsNear(T_map_odom_, q.T_world_imu.translation());
+    if (!pts.empty()) {
+      service_.map().lidar().insert(pts);
+      counters_.prior_points += pts.size();
+    }
+  }
   const Submap s = service_.answer(q);
   const livo::submap_t out = toMsg(s);
   const auto bytes = std::uint64_t(out.getEncodedSize());
@@ -155,6 +174,10 @@ std::string MapServerNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "queries " << c.queries << " (visual " << c.visual_queries << "), updates " << c.updates << " (stale "
      << c.stale_updates << "), points inserted " << c.points_inserted << "\n";
+  if (prior_)
+    os << "site map: " << counters_.map_corrections << " corrections, " << prior_->keyframesHanded()
+       << " keyframes (" << counters_.prior_points << " points) served"
+       << (have_correction_ ? "" : "; never localised (is livo-loop --prior-map running?)") << "\n";
   os << "visual points: upserts " << c.visual_upserts << ", removals " << c.visual_removals << ", rejected "
      << c.visual_rejected << ", observations " << c.observations_added << " (unknown ids " << c.observations_unknown
      << ")\n";

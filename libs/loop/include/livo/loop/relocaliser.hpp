@@ -14,10 +14,7 @@
 #include "livo/loop/map_frame.hpp"
 #include "livo/loop/site_map.hpp"
 
-#include <array>
-#include <cstdint>
 #include <deque>
-#include <set>
 #include <functional>
 #include <string>
 #include <vector>
@@ -50,17 +47,6 @@ class Relocaliser {
   MapCorrection anchors() const;
   Utime firstLocalised() const { return first_localised_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
-  /// A map keyframe's points for the odometry's map: in the keyframe frame, and that frame in the
-  /// odometry frame by the current T_map_odom.
-  struct MapPatch {
-    int keyframe = -1;
-    Pose T_odom_key = Pose::Identity();
-    std::vector<Vec3> points;
-  };
-  /// Localised: the map keyframes within `radius_m` of the robot (odometry pose T_odom_body) not handed
-  /// out before, one per cell of loop.keyframe_distance_m (a map of several laps holds each place several
-  /// times); marks them handed out. Empty when not localised.
-  std::vector<MapPatch> mapPointsNear(const Pose& T_odom_body, double radius_m);
   int attempts() const { return attempts_; }
   int matches() const { return int(anchors_.size()); }
   int timesLeftMap() const { return left_map_; }
@@ -89,8 +75,6 @@ class Relocaliser {
   double path_at_match_m_ = 0.0;
   double var_t_ = 0.0, var_r_ = 0.0;  ///< variance of the current transform at the last anchor (m^2, rad^2)
   int gated_ = 0, ambiguous_ = 0;
-  std::vector<bool> handed_out_;
-  std::set<std::array<std::int64_t, 3>> seeded_cells_;  ///< cells of loop.keyframe_distance_m handed out
   int frames_since_attempt_ = 0, attempts_ = 0, left_map_ = 0;
   Utime first_frame_ = -1, first_localised_ = -1;
   std::vector<KeyframePose> anchors_;

@@ -6,6 +6,11 @@
 // Restarts of the estimator: the node keeps the latest LIVO_FILTER_STATE and the LIVO_IMU samples after
 // it (at most `max_resume_imu`, the oldest dropped and counted), and answers LIVO_RESUME_REQUEST with
 // both on LIVO_RESUME (livo/io/resume_messages.hpp; estimator_node.hpp says what the estimator does).
+//
+// With a site map (livo-mapserver --prior-map, setPriorMap): the node follows LIVO_MAP_CORRECTION (livo-loop
+// --prior-map, which localises the odometry in that map) and, once a correction came, inserts the map's
+// keyframes near each query's position into the LiDAR map before answering (PriorMapSeeder), so that the
+// map's planes serve the estimator's LiDAR update.
 #pragma once
 
 #include "livo/io/channels.hpp"
@@ -14,7 +19,9 @@
 #include <livo/map_query_t.hpp>
 #include <livo/map_update_t.hpp>
 #include <livo/resume_request_t.hpp>
+#include "livo/io/loop_messages.hpp"
 #include "livo/io/resume_messages.hpp"
+#include "livo/loop/prior_seeder.hpp"
 #include "livo/process/lcm_node.hpp"
 
 #include <cstdint>
@@ -40,11 +47,15 @@ class MapServerNode {
     std::uint64_t resume_answers = 0;     ///< LIVO_RESUME sent
     std::uint64_t resume_with_state = 0;  ///< ... of those with a state
     std::uint64_t resume_imu_dropped = 0; ///< IMU samples after the last state dropped (buffer full)
+    std::uint64_t map_corrections = 0;    ///< LIVO_MAP_CORRECTION received (with a site map)
+    std::uint64_t prior_points = 0;       ///< site map points inserted
   };
   const Counters& counters() const { return counters_; }
   /// The process's effective config (ConfigFile::effectiveLines()): a resume request whose config
   /// differs in a key both read (except map.memory_cap_mb, the map server's own) gets the differences.
   void setConfigLines(std::string lines) { config_lines_ = std::move(lines); }
+  /// Serve a site map's planes once livo-loop has localised (see above); `seeder` must outlive the node.
+  void setPriorMap(PriorMapSeeder* seeder);
   std::string progressLine() const;
   std::string summary() const;
 
@@ -71,6 +82,10 @@ class MapServerNode {
   std::deque<ImuSample> imu_since_;  ///< samples after last_state_'s time (or the newest, before any state)
   std::uint64_t imu_dropped_since_ = 0;
   std::string config_lines_;
+  // Site map.
+  PriorMapSeeder* prior_ = nullptr;
+  bool have_correction_ = false;
+  Pose T_map_odom_ = Pose::Identity();
 };
 
 }  // namespace livo
