@@ -40,16 +40,13 @@ class Relocaliser {
   RelocaliseStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
 
   bool localised() const { return localised_; }
-  bool insideMap() const { return localised_ && !outside_; }
   /// T_map_odom of the last anchor (identity before the first).
   const Pose& correction() const { return T_map_odom_; }
   /// The anchors as map-frame keyframes: feed to MapFrameTrajectory for the frames' map poses.
   MapCorrection anchors() const;
   Utime firstLocalised() const { return first_localised_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
-  int attempts() const { return attempts_; }
   int matches() const { return int(anchors_.size()); }
-  int timesLeftMap() const { return left_map_; }
   /// "localised at t ... (x s after the first frame), N anchors, ..."
   std::string summary() const;
   void addCounters(std::map<std::string, double>& c) const;

@@ -52,7 +52,6 @@ class SiteMap {
 
   std::size_t size() const { return keyframes_.size(); }
   const SiteKeyframe& keyframe(int i) const { return keyframes_.at(static_cast<std::size_t>(i)); }
-  double tileEdge() const { return tile_m_; }
   /// Keyframe i's points in its frame; reads its tile when not held. Throws std::runtime_error naming
   /// the tile file when it is missing or shorter than the index says.
   std::vector<Vec3> points(int i);
