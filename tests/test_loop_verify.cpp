@@ -78,6 +78,7 @@ TEST_F(LoopVerify, TwoVisitsToOnePlaceGiveTheTrueRelativePose) {
   LoopVerifier v(config());
   // The odometry has drifted 1.5 m and 4 deg over the lap (340 m).
   const LoopCheck c = v.verify(first_.local, second_.local, m.yaw_rad, drifted(gt, 1.5, 4.0), 340.0);
+  std::printf("true loop: sigma_min %.3f (loop.min_sigma %.2f)\n", c.sigma_min, config().min_sigma);
   const double dp = (c.T_cand_query.translation() - gt.translation()).norm();
   const double dr = rotationAngle(gt.linear().transpose() * c.T_cand_query.linear()) * 180.0 / M_PI;
   std::printf("revisit: gt %.2f m apart, overlap %.3f, rms %.3f m, %d iterations, error %.4f m %.4f deg (%s)\n",
@@ -122,6 +123,49 @@ TEST_F(LoopVerify, TooFewPointsAreCountedNotRegistered) {
   EXPECT_EQ(v.verify({}, second_.local, 0.0, Pose::Identity(), 340.0).reason, LoopReject::TooFewPoints);
   EXPECT_EQ(v.counts().too_few_points, 2);
   EXPECT_EQ(v.counts().total(), 2);
+}
+
+// A corridor: two walls and a floor, nothing across its axis. Two views 2 m apart along it look the same,
+// the registration has nothing to slide against and converges where it starts: without the degeneracy
+// check that would be a loop 2 m off. The simulator's corridor scans are rejected too.
+TEST(LoopVerifyCorridor, ARegistrationFreeAlongTheCorridorIsRejectedAsDegenerate) {
+  std::vector<Vec3> corridor;
+  for (double x = -30.0; x <= 30.0; x += 0.2)
+    for (double t = -1.5; t <= 1.5; t += 0.2) {
+      corridor.emplace_back(x, t, -1.5);          // floor
+      corridor.emplace_back(x, -1.5, t);          // walls
+      corridor.emplace_back(x, 1.5, t);
+    }
+  std::vector<Vec3> later = corridor;  // the same view 2 m further along (x), cut to the same extent
+  for (Vec3& p : later) p.x() -= 2.0;
+  LoopVerifyConfig cfg;
+  cfg.range_sigma_m = 0.02;
+  cfg.bearing_sigma_deg = 0.03;
+  LoopVerifier v(cfg);
+  const LoopCheck c = v.verify(corridor, later, 0.0, Pose::Identity(), 5.0);
+  std::printf("synthetic corridor: registered %.2f m along it (truth 2 m), sigma_min %.4f: %s\n",
+              c.T_cand_query.translation().x(), c.sigma_min, toString(c.reason));
+  EXPECT_EQ(c.reason, LoopReject::Degenerate);
+  EXPECT_LT(c.sigma_min, 0.01);
+  EXPECT_EQ(v.counts().degenerate, 1);
+  cfg.min_sigma = 0.0;
+  LoopVerifier off(cfg);
+  const LoopCheck slid = off.verify(corridor, later, 0.0, Pose::Identity(), 5.0);
+  EXPECT_TRUE(slid.accepted) << "without the check: " << toString(slid.reason);
+  EXPECT_GT(std::abs(slid.T_cand_query.translation().x() - 2.0), 1.0) << "and it would be a loop metres off";
+
+  // The simulator's corridor, two scans 2 m apart: not accepted either (here the registration slides away).
+  const sim::Simulator s(sim::loadScenarioFile(std::string(LIVO_SOURCE_DIR) + "/config/sim/corridor.yaml"));
+  auto at = [&](std::int64_t j) { return s.T_world_imu(s.lidarUtime(j)); };
+  std::int64_t b = 61;
+  while ((at(b).translation() - at(60).translation()).norm() < 2.0) ++b;
+  LoopVerifyConfig sc = cfg;
+  sc.min_sigma = LoopVerifyConfig{}.min_sigma;
+  LoopVerifier sv(sc);
+  const LoopCheck sim_check = sv.verify(inKeyframe(worldScan(s, 60), at(60)), inKeyframe(worldScan(s, b), at(b)), 0.0,
+                                        Pose::Identity(), 5.0);
+  std::printf("simulated corridor: %s, sigma_min %.4f\n", toString(sim_check.reason), sim_check.sigma_min);
+  EXPECT_FALSE(sim_check.accepted);
 }
 
 TEST(LoopVerifyConfig, ResidualBoundFollowsTheLidarNoise) {

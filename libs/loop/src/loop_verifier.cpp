@@ -1,5 +1,7 @@
 #include "livo/loop/loop_verifier.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include "livo/map/point_cov.hpp"
 #include "livo/map/voxel_key.hpp"
 #include "livo/map/voxel_map.hpp"
@@ -17,6 +19,9 @@ void LoopVerifyConfig::load(const ConfigNode& loop, double range_sigma, double b
   loop.get("verify_iterations", max_iterations).get("min_overlap", min_overlap).get("max_residual_m", max_rms_m);
   loop.get("max_drift_fraction", drift_fraction).get("max_drift_m", drift_base_m);
   loop.get("max_drift_yaw_deg_per_100m", drift_yaw_deg_per_100m).get("max_drift_yaw_deg", drift_yaw_base_deg);
+  loop.get("min_sigma", min_sigma);
+  loop.check(std::isfinite(min_sigma) && min_sigma >= 0 && min_sigma < 0.58, "min_sigma",
+             "must be in [0, 0.577] (0: no degeneracy check)");
   auto positive = [&](double v, const char* key) { loop.check(std::isfinite(v) && v > 0, key, "must be > 0"); };
   positive(voxel_m, "verify_voxel_m");
   positive(downsample_m, "verify_downsample_m");
@@ -44,6 +49,7 @@ const char* toString(LoopReject r) {
     case LoopReject::NoConvergence: return "registration did not converge";
     case LoopReject::LowOverlap: return "low overlap";
     case LoopReject::HighResidual: return "high residual";
+    case LoopReject::Degenerate: return "degenerate (the planes leave a direction free)";
     case LoopReject::Inconsistent: return "inconsistent with the odometry";
   }
   return "?";
@@ -62,6 +68,7 @@ namespace {
 struct Step {
   int matched = 0;
   double sq_sum = 0.0;  // unweighted squared distances of the matched points
+  Mat3 normals = Mat3::Zero();  // sum of n n^T of the matched planes
 };
 
 // One association + Gauss-Newton step of T (right perturbation: R Exp(dθ), t + dt); with `solve` false
@@ -82,8 +89,9 @@ Step gaussNewton(const VoxelMap& planes, const std::vector<Vec3>& pts, const std
     if (!planes.findBestPlane(pw, m)) continue;
     ++s.matched;
     s.sq_sum += m.distance * m.distance;
-    if (!solve) continue;
     const Vec3& n = m.plane->normal;
+    s.normals.noalias() += n * n.transpose();
+    if (!solve) continue;
     Eigen::Matrix<double, 1, 6> J;
     J.leftCols<3>() = -(n.transpose() * R * hat(pts[i]));
     J.rightCols<3>() = n.transpose();
@@ -111,6 +119,7 @@ LoopCheck LoopVerifier::finish(LoopCheck c) {
     case LoopReject::NoConvergence: ++counts_.no_convergence; break;
     case LoopReject::LowOverlap: ++counts_.low_overlap; break;
     case LoopReject::HighResidual: ++counts_.high_residual; break;
+    case LoopReject::Degenerate: ++counts_.degenerate; break;
     case LoopReject::Inconsistent: ++counts_.inconsistent; break;
   }
   c.accepted = c.reason == LoopReject::None;
@@ -124,6 +133,7 @@ void LoopCheckCounts::addCounters(const std::string& prefix, std::map<std::strin
   c[prefix + "_rejected_no_convergence"] = double(no_convergence);
   c[prefix + "_rejected_low_overlap"] = double(low_overlap);
   c[prefix + "_rejected_high_residual"] = double(high_residual);
+  c[prefix + "_rejected_degenerate"] = double(degenerate);
   c[prefix + "_rejected_inconsistent"] = double(inconsistent);
 }
 
@@ -205,12 +215,17 @@ LoopCheck LoopVerifier::verify(const std::vector<Vec3>& cand_points, const std::
   c.T_cand_query = T;
   c.overlap = double(final_step.matched) / double(query.size());
   c.rms_m = final_step.matched > 0 ? std::sqrt(final_step.sq_sum / final_step.matched) : 0.0;
+  if (final_step.matched > 0) {
+    const double lambda_min = Eigen::SelfAdjointEigenSolver<Mat3>(final_step.normals).eigenvalues()(0);
+    c.sigma_min = std::sqrt(std::max(0.0, lambda_min) / final_step.matched);
+  }
   const Pose gap = T_odom.inverse() * T;
   c.odometry_gap_m = (T.translation() - T_odom.translation()).norm();
   c.odometry_gap_deg = rotationAngle(gap.linear()) * 180.0 / M_PI;
   if (!converged) c.reason = LoopReject::NoConvergence;
   else if (c.overlap < cfg_.min_overlap) c.reason = LoopReject::LowOverlap;
   else if (c.rms_m > cfg_.maxRms()) c.reason = LoopReject::HighResidual;
+  else if (c.sigma_min < cfg_.min_sigma) c.reason = LoopReject::Degenerate;
   else if (c.odometry_gap_m > drift_m ||
            c.odometry_gap_deg > cfg_.drift_yaw_base_deg + cfg_.drift_yaw_deg_per_100m * path_between_m / 100.0)
     c.reason = LoopReject::Inconsistent;

@@ -33,6 +33,11 @@ struct LoopVerifyConfig {
   double range_sigma_m = 0.02;     ///< lidar.range_noise_m (read by the LiDAR update; handed in)
   double bearing_sigma_deg = 0.1;  ///< lidar.beam_noise_deg (likewise)
   int min_points = 100;            ///< fewer (after thinning) on either side: rejected, too few points
+  /// loop.min_sigma: the matched planes' normals must constrain every direction: sqrt(lambda_min / N) of
+  /// sum n n^T over the N matched points (the LiDAR update's degeneracy metric, selector.degeneracy_threshold)
+  /// at least this, else rejected as degenerate (a corridor or a wall lets the registration slide along it;
+  /// the simulator's corridor gives 0.011, its street frames 0.28 and more, the revisit block 0.14 and more)
+  double min_sigma = 0.08;
   /// Two keyframes whose odometry puts them farther apart than this plus the drift bound cannot be one
   /// place: rejected as inconsistent before any registration (LoopConfig sets the descriptor's range).
   double max_place_offset_m = 40.0;
@@ -43,7 +48,7 @@ struct LoopVerifyConfig {
   double maxRms() const;
 };
 
-enum class LoopReject { None, TooFewPoints, NoConvergence, LowOverlap, HighResidual, Inconsistent };
+enum class LoopReject { None, TooFewPoints, NoConvergence, LowOverlap, HighResidual, Degenerate, Inconsistent };
 const char* toString(LoopReject r);
 
 struct LoopCheck {
@@ -53,14 +58,18 @@ struct LoopCheck {
   Pose T_cand_query = Pose::Identity();
   double overlap = 0.0;  ///< share of the query's thinned points matched to a plane at the end
   double rms_m = 0.0;    ///< RMS distance of the matched points to their planes
+  double sigma_min = 0.0;  ///< the matched normals' degeneracy metric (LoopVerifyConfig::min_sigma)
   int iterations = 0;
   double odometry_gap_m = 0.0, odometry_gap_deg = 0.0;  ///< against the odometry's relative pose
 };
 
 /// Counts of the checks by outcome.
 struct LoopCheckCounts {
-  int accepted = 0, too_few_points = 0, no_convergence = 0, low_overlap = 0, high_residual = 0, inconsistent = 0;
-  int total() const { return accepted + too_few_points + no_convergence + low_overlap + high_residual + inconsistent; }
+  int accepted = 0, too_few_points = 0, no_convergence = 0, low_overlap = 0, high_residual = 0, degenerate = 0,
+      inconsistent = 0;
+  int total() const {
+    return accepted + too_few_points + no_convergence + low_overlap + high_residual + degenerate + inconsistent;
+  }
   /// PREFIX_checks, PREFIX_accepted and PREFIX_rejected_<reason> into stats.json counters.
   void addCounters(const std::string& prefix, std::map<std::string, double>& c) const;
 };
