@@ -62,6 +62,14 @@ class MapBytes {
   std::uint64_t counted_ = 0;
 };
 
+/// The frame's registered points (the LiDAR update's) in the odometry frame, at the frame's pose T.
+std::vector<Vec3> worldPoints(const FrameResult& r, const Pose& T) {
+  std::vector<Vec3> world;
+  world.reserve(r.lio.points.size());
+  for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
+  return world;
+}
+
 /// --loop: every posed frame goes to the LoopCloser (its registered points on keyframes); at the end
 /// trajectory_map.tum holds every frame in the map frame of the final graph (the frame's odometry pose
 /// carried by the last keyframe at or before it: MapFrameTrajectory, as livo-exporter does with the
@@ -73,12 +81,7 @@ class LoopRun {
   void add(const Frame& frame, const FrameResult& r) {
     if (!r.lio.initialized) return;
     const Pose T = r.lio.state.pose();
-    closer_.add(frame.utime, T, [&] {
-      std::vector<Vec3> world;
-      world.reserve(r.lio.points.size());
-      for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
-      return world;
-    });
+    closer_.add(frame.utime, T, [&] { return worldPoints(r, T); });
     frames_.push_back({frame.utime, T});
   }
 
@@ -126,12 +129,7 @@ class PriorMapRun {
     if (first_frame_ < 0) first_frame_ = frame.utime;
     if (!r.lio.initialized) return {};
     const Pose T = r.lio.state.pose();
-    const RelocaliseStep st = reloc_.add(frame.utime, T, [&] {
-      std::vector<Vec3> world;
-      world.reserve(r.lio.points.size());
-      for (const BodyPoint& bp : r.lio.points) world.push_back(T * bp.p_imu);
-      return world;
-    });
+    const RelocaliseStep st = reloc_.add(frame.utime, T, [&] { return worldPoints(r, T); });
     frames_.push_back({frame.utime, T});
     if (cfg_.prior_map_planes && reloc_.localised())
       pipeline_.insertPriorPoints(seeder_.pointsNear(reloc_.correction(), T.translation()));

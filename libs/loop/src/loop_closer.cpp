@@ -22,9 +22,7 @@ void LoopConfig::load(const ConfigNode& loop, double lidar_max_range_m, double r
   loop.get("site_tile_m", site_tile_m).get("site_budget_mb", site_budget_mb);
   loop.get("relocalise_every_frames", relocalise_every_frames).get("relocalise_agree_m", relocalise_agree_m);
   loop.get("relocalise_agree_deg", relocalise_agree_deg).get("outside_map_after_m", outside_map_after_m);
-  loop.get("relocalise_query_s", relocalise_query_s).get("prior_map_planes", prior_map_planes);
-  loop.check(std::isfinite(relocalise_query_s) && relocalise_query_s >= 0 && relocalise_query_s <= 60,
-             "relocalise_query_s", "must be in [0, 60] s (0: the frame's scan alone)");
+  loop.get("prior_map_planes", prior_map_planes);
   loop.check(std::isfinite(site_tile_m) && site_tile_m >= 1 && site_tile_m <= 1e5, "site_tile_m", "must be in [1, 1e5] m");
   loop.check(std::isfinite(site_budget_mb) && site_budget_mb >= 0 && site_budget_mb <= 1e6, "site_budget_mb",
              "must be in [0, 1e6] MB (0: no budget)");

@@ -115,8 +115,8 @@ PoseGraphReport PoseGraph::optimize() {
       }
     } else {
       const double len = e.T_from_to.translation().norm();
-      err.inv_rot = 1.0 / ((0.05 + cfg_.odometry_sigma_deg_per_m * len) * M_PI / 180.0);
-      err.inv_pos = 1.0 / (0.01 + cfg_.odometry_sigma_fraction * len);
+      err.inv_rot = 1.0 / cfg_.odometrySigmaRad(len);
+      err.inv_pos = 1.0 / cfg_.odometrySigmaM(len);
     }
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(new RelativePoseError(err));
     const auto a = static_cast<std::size_t>(e.from), b = static_cast<std::size_t>(e.to);

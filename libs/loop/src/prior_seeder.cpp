@@ -16,6 +16,10 @@ PriorMapSeeder::PriorMapSeeder(SiteMap& map, const LoopConfig& cfg)
 std::vector<PointWithCov> PriorMapSeeder::pointsNear(const Pose& T_map_odom, const Vec3& robot_odom) {
   std::vector<PointWithCov> out;
   const Vec3 robot = T_map_odom * robot_odom;
+  // The keyframes within reach change only as the robot moves: look again after half a cell of travel.
+  if (have_last_ && (robot - last_robot_).norm() < 0.5 * cell_m_) return out;
+  have_last_ = true;
+  last_robot_ = robot;
   const Pose T_odom_map = T_map_odom.inverse();
   for (int i = 0; i < static_cast<int>(map_.size()); ++i) {
     if (handed_[std::size_t(i)]) continue;

@@ -73,14 +73,6 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   if (first_frame_ < 0) first_frame_ = t;
   const bool key = selector_.offer(T_odom_body);
   const bool try_now = localised_ ? key : (key || ++frames_since_attempt_ >= cfg_.relocalise_every_frames);
-  // The query: this frame's points and those of the frames before it within loop.relocalise_query_s and
-  // loop.keyframe_distance_m of travel (a narrow-FOV sensor at rest fills its view over a second).
-  if (cfg_.relocalise_query_s > 0.0) {
-    recent_.push_back({t, selector_.pathLength(), thinPoints(scan(), cfg_.keyframe_points_m)});
-    while (!recent_.empty() && (toSeconds(t - recent_.front().utime) > cfg_.relocalise_query_s ||
-                                selector_.pathLength() - recent_.front().path_m > cfg_.keyframes.distance_m))
-      recent_.pop_front();
-  }
   if (!try_now) return st;
   frames_since_attempt_ = 0;
   Stopwatch watch;
@@ -88,12 +80,7 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   ++attempts_;
   const Pose K = keyframeFrame(T_odom_body);
   const Pose K_inv = K.inverse();
-  std::vector<Vec3> local;
-  if (cfg_.relocalise_query_s > 0.0) {
-    for (const RecentScan& r : recent_) local.insert(local.end(), r.points.begin(), r.points.end());
-  } else {
-    local = scan();
-  }
+  std::vector<Vec3> local = scan();
   for (Vec3& p : local) p = K_inv * p;
 
   Pose H = Pose::Identity();
@@ -144,8 +131,8 @@ bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
   // narrows it. Fused at the keyframe: its map pose moves from the prediction towards the match's by the
   // gains (translation and rotation apart), a match beyond 3 sigma of the prediction is refused.
   const double path = selector_.pathLength() - path_at_match_m_;
-  const double q_t = std::pow(0.01 + cfg_.graph.odometry_sigma_fraction * path, 2);
-  const double q_r = std::pow((0.05 + cfg_.graph.odometry_sigma_deg_per_m * path) * M_PI / 180.0, 2);
+  const double q_t = std::pow(cfg_.graph.odometrySigmaM(path), 2);
+  const double q_r = std::pow(cfg_.graph.odometrySigmaRad(path), 2);
   const double r_t = std::pow(cfg_.graph.loop_sigma_m, 2), r_r = std::pow(cfg_.graph.loop_sigma_deg * M_PI / 180.0, 2);
   const double p_t = var_t_ + q_t, p_r = var_r_ + q_r;
   const Pose pred = T_map_odom_ * K, meas = H_meas * K;
@@ -167,9 +154,10 @@ bool Relocaliser::fuse(const Pose& K, const Pose& H_meas) {
   return true;
 }
 
-MapCorrection Relocaliser::anchors() const {
+MapCorrection Relocaliser::anchors(bool all) const {
   MapCorrection c;
-  c.keyframes = anchors_;
+  c.first = (all || anchors_.empty()) ? 0 : static_cast<std::int32_t>(anchors_.size()) - 1;
+  c.keyframes.assign(anchors_.begin() + c.first, anchors_.end());
   c.keyframes_total = static_cast<std::int32_t>(anchors_.size());
   c.T_map_odom = T_map_odom_;
   c.utime = anchors_.empty() ? 0 : anchors_.back().utime;

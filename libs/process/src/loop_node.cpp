@@ -99,12 +99,8 @@ void LoopNode::take(const OdometryOutput& o, const std::vector<Eigen::Vector3f>*
 
 void LoopNode::publish(bool all, bool final) {
   if (reloc_) {
-    MapCorrection c = reloc_->anchors();  // every anchor
+    MapCorrection c = reloc_->anchors(all);
     c.final = final;
-    if (!all && !c.keyframes.empty()) {  // the newest only
-      c.first = static_cast<std::int32_t>(c.keyframes.size()) - 1;
-      c.keyframes.erase(c.keyframes.begin(), c.keyframes.end() - 1);
-    }
     lcm_.publish(channels_.map_correction, toMsg(c));
   } else {
     lcm_.publish(channels_.map_correction, toMsg(closer_->correctionMessage(all, final)));

@@ -43,9 +43,6 @@ struct LoopConfig {
   double site_tile_m = 100.0;      ///< loop.site_tile_m: edge of a site map's point tiles
   double site_budget_mb = 64.0;    ///< loop.site_budget_mb: tiles' points held while localising (0: all)
   int relocalise_every_frames = 5; ///< loop.relocalise_every_frames: before localised, try every Nth frame
-  /// loop.relocalise_query_s: a try's query gathers the scans of this many seconds (and at most
-  /// loop.keyframe_distance_m of travel); 0: the frame's scan alone
-  double relocalise_query_s = 0.0;
   /// loop.prior_map_planes: once localised, the site map's keyframe points within the descriptor's range
   /// of the robot go into the odometry's LiDAR map (each keyframe once), so that the map's planes serve
   /// the LiDAR update (livo-run --prior-map); one keyframe per cell of keyframe_distance_m

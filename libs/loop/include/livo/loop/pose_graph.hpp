@@ -23,6 +23,11 @@ struct PoseGraphConfig {
   double loop_robust_sigmas = 3.0;
   int max_iterations = 100;      ///< loop.graph_iterations: Levenberg-Marquardt iterations at most
   void load(const ConfigNode& loop);
+  /// Sigmas of `length_m` of odometry: position (m) and rotation (rad).
+  double odometrySigmaM(double length_m) const { return 0.01 + odometry_sigma_fraction * length_m; }
+  double odometrySigmaRad(double length_m) const {
+    return (0.05 + odometry_sigma_deg_per_m * length_m) * 3.14159265358979323846 / 180.0;
+  }
 };
 
 struct PoseGraphEdge {

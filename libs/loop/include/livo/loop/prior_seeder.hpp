@@ -22,7 +22,8 @@ class PriorMapSeeder {
   /// `map` must outlive the seeder. Radius: loop.descriptor_range_m (the reach of a keyframe's points).
   PriorMapSeeder(SiteMap& map, const LoopConfig& cfg);
   /// The points of the map keyframes within the radius of the robot (`robot_odom`, odometry frame) not
-  /// handed out before, in the odometry frame.
+  /// handed out before, in the odometry frame. Looks only after half a cell of travel since the last
+  /// look (the scan over every map keyframe is not done each frame).
   std::vector<PointWithCov> pointsNear(const Pose& T_map_odom, const Vec3& robot_odom);
   std::size_t keyframesHanded() const { return keyframes_; }
   std::size_t pointsHanded() const { return points_; }
@@ -33,6 +34,8 @@ class PriorMapSeeder {
   std::vector<bool> handed_;
   std::set<std::array<std::int64_t, 3>> cells_;
   std::size_t keyframes_ = 0, points_ = 0;
+  bool have_last_ = false;
+  Vec3 last_robot_ = Vec3::Zero();  ///< map-frame position of the last look
 };
 
 }  // namespace livo

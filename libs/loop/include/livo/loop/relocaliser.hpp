@@ -14,7 +14,6 @@
 #include "livo/loop/map_frame.hpp"
 #include "livo/loop/site_map.hpp"
 
-#include <deque>
 #include <functional>
 #include <string>
 #include <vector>
@@ -35,15 +34,16 @@ struct RelocaliseStep {
 class Relocaliser {
  public:
   Relocaliser(const LoopConfig& cfg, SiteMap& map);
-  /// Takes the next odometry pose; `scan` is called for the frame's registered points (odometry frame):
-  /// every frame when queries gather loop.relocalise_query_s of scans, else when the frame is tried.
+  /// Takes the next odometry pose; `scan` is called for the frame's registered points (odometry frame)
+  /// when the frame is tried against the map.
   RelocaliseStep add(Utime t, const Pose& T_odom_body, const std::function<std::vector<Vec3>()>& scan);
 
   bool localised() const { return localised_; }
   /// T_map_odom of the last anchor (identity before the first).
   const Pose& correction() const { return T_map_odom_; }
-  /// The anchors as map-frame keyframes: feed to MapFrameTrajectory for the frames' map poses.
-  MapCorrection anchors() const;
+  /// The anchors as map-frame keyframes (all, or the newest only): feed to MapFrameTrajectory for the
+  /// frames' map poses.
+  MapCorrection anchors(bool all = true) const;
   Utime firstLocalised() const { return first_localised_; }
   const LoopCheckCounts& checks() const { return verifier_.counts(); }
   int matches() const { return int(anchors_.size()); }
@@ -75,12 +75,6 @@ class Relocaliser {
   int frames_since_attempt_ = 0, attempts_ = 0, left_map_ = 0;
   Utime first_frame_ = -1, first_localised_ = -1;
   std::vector<KeyframePose> anchors_;
-  struct RecentScan {
-    Utime utime;
-    double path_m;
-    std::vector<Vec3> points;  ///< odometry frame, thinned to loop.keyframe_points_m
-  };
-  std::deque<RecentScan> recent_;
   double ms_ = 0.0;
 };
 
