@@ -280,8 +280,8 @@ TEST(SuiteNetns, FourProcessesPlusLivoLoopLocaliseInASiteMap) {
             << es.ate.translation_m.max * 100 << " cm (" << single.size() << " poses); four processes + livo-loop "
             << ep.ate.translation_m.mean * 100 << " cm, max " << ep.ate.translation_m.max * 100 << " cm (" << split.size()
             << " poses)\n";
-  // 2026-12-06: livo-run --prior-map mean 1.258 cm, max 7.41 cm; four processes + livo-loop 1.261 cm,
-  // max 7.51 cm (286 poses each; the map server served 120 keyframes). Bounds about twice the figures
+  // 2026-12-07: livo-run --prior-map mean 1.110 cm, max 3.84 cm; four processes + livo-loop 1.103 cm,
+  // max 3.85 cm (286 poses each). Bounds about twice the figures
   // (the difference: a few millimetres of floating-point order, as for loop closure).
   EXPECT_LE(ep.ate.translation_m.mean, 0.025);
   EXPECT_LE(std::abs(ep.ate.translation_m.mean - es.ate.translation_m.mean), 0.002);
