@@ -1,5 +1,6 @@
 // libs/sim against its own ground truth: trajectory derivatives vs finite differences, IMU integrated
-// back to the trajectory (RK4), noise statistics vs the configured densities.
+// back to the trajectory (RK4), noise statistics vs the configured densities, vibration aliased by the
+// sampling.
 #include "sim_test_util.hpp"
 
 #include "livo/sim/random.hpp"
@@ -8,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
+#include <vector>
 
 using namespace livo;
 using namespace livo::sim;
@@ -154,5 +157,50 @@ TEST(SimImu, NoiseAndBiasWalkMatchTheDensities) {
     EXPECT_NEAR(std::sqrt(ea / n), sc.imu.accel_noise / std::sqrt(dt), 0.06 * sc.imu.accel_noise / std::sqrt(dt));
     EXPECT_NEAR(std::sqrt(wg / (n - 1)), sc.imu.gyro_bias_walk * std::sqrt(dt), 0.06 * sc.imu.gyro_bias_walk * std::sqrt(dt));
     EXPECT_NEAR(std::sqrt(wa / (n - 1)), sc.imu.accel_bias_walk * std::sqrt(dt), 0.06 * sc.imu.accel_bias_walk * std::sqrt(dt));
+  }
+}
+
+// Vibration is a signal evaluated at the IMU's sample times (a sampling IMU without an anti-aliasing
+// filter): 91 Hz sampled at 100 Hz shows as a 9 Hz oscillation. Oracle from the vibration model
+// (scenario.hpp): per axis a centre tone at freq_hz with half of the power plus side tones (84.6, 94.6
+// and 100.1 Hz: aliased to 15.4, 5.4 and 0.1 Hz), the RMS being the configured amplitude; so the
+// samples oscillate at |91 - 100| = 9 Hz with amplitude sqrt(2 x 0.5) x RMS = RMS and keep the RMS.
+TEST(SimImu, VibrationAboveNyquistAliasesAtItsAmplitude) {
+  SimScenario sc = makeScenario("room");  // noise-free
+  sc.seed = 11;
+  sc.duration_s = 20.0;  // 2000 samples: 9 Hz is bin 180 exactly
+  sc.trajectory.static_s = 30.0;  // at rest throughout
+  sc.imu.rate_hz = 100.0;
+  sc.imu.vibration.accel_mps2 = 1.5;
+  sc.imu.vibration.gyro_rad_s = 0.04;
+  sc.imu.vibration.freq_hz = 91.0;
+  Simulator sim(sc);
+  std::vector<Vec3> dg, da;  // measurement - truth: the vibration alone
+  sim.run({[&](const ImuSample& s, const ImuTruth& t) {
+             dg.push_back(s.gyro - t.gyro);
+             da.push_back(s.accel - t.accel);
+           },
+           nullptr, nullptr});
+  ASSERT_EQ(dg.size(), 2000u);
+  const double n = static_cast<double>(dg.size());
+  // Amplitude of the component at f Hz in samples at 100 Hz (DFT; f on a bin of the 20 s window).
+  auto amplitude = [&](const std::vector<Vec3>& x, int axis, double f) {
+    double re = 0.0, im = 0.0;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      const double ph = 2.0 * kPi * f * static_cast<double>(k) / sc.imu.rate_hz;
+      re += x[k][axis] * std::cos(ph);
+      im -= x[k][axis] * std::sin(ph);
+    }
+    return 2.0 / n * std::hypot(re, im);
+  };
+  for (int a = 0; a < 3; ++a) {
+    SCOPED_TRACE(a);
+    for (const auto& [x, rms] : {std::make_pair(&dg, sc.imu.vibration.gyro_rad_s), std::make_pair(&da, sc.imu.vibration.accel_mps2)}) {
+      EXPECT_NEAR(amplitude(*x, a, 9.0), rms, 0.03 * rms) << "the 91 Hz tone seen at 9 Hz";
+      EXPECT_LT(amplitude(*x, a, 30.0), 0.02 * rms) << "nothing where no tone aliases (not a white noise)";
+      double sq = 0.0;
+      for (const Vec3& v : *x) sq += v[a] * v[a];
+      EXPECT_NEAR(std::sqrt(sq / n), rms, 0.03 * rms) << "the RMS survives the sampling";
+    }
   }
 }
