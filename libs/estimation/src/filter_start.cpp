@@ -210,10 +210,7 @@ FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan&
   Step st;
   ++frames_;
   const double tol = lio_.range_noise_m;
-  // A frame cut at an image holds part of a sweep: the smear that matters is a whole sweep's, the
-  // longest frame seen.
-  sweep_s_ = std::max(sweep_s_, sweepSeconds(trace));
-  const double T = sweep_s_;
+  const double T = sweepSeconds(trace);
   const double sv_prior =
       std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(sidx::kVel, sidx::kVel)).eigenvalues().maxCoeff());
   if (points.empty()) return st;

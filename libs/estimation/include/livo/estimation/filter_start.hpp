@@ -117,7 +117,6 @@ class FilterStart {
   OccupancyPyramid occupancy_;
   double map_smear_m_ = 0.0;   ///< the worst smear sigma of the scans in the start map
   int map_scans_ = 0;          ///< scans in the start map
-  double sweep_s_ = 0.0;       ///< the longest frame seen, s (a whole sweep)
   LidarScan origin_sweep_;     ///< while the start map is one scan: its sweep, trace and pose
   std::vector<ImuTracePoint> origin_trace_;
   NavState origin_x_;
