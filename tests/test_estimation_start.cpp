@@ -93,7 +93,7 @@ TEST(FilterStart, AtRestTiltedInGUnits) {
   const StartConfig sc;
   EXPECT_NEAR(std::sqrt(c.P(sidx::kVel, sidx::kVel)), 0.5 * sc.max_speed_mps, 1e-9);
   EXPECT_NEAR(std::sqrt(c.P(sidx::kBg, sidx::kBg)), cfg.init_gyro_bias_sigma_rad_s, 1e-12);
-  EXPECT_LT((c.P.topLeftCorner<6, 6>().norm()), 1e-6);
+  EXPECT_LT(c.P.block<6, 6>(0, 0).norm(), 1e-6);
   EXPECT_EQ(c.x.v_world, Vec3::Zero());
 }
 
