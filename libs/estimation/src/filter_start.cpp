@@ -131,6 +131,14 @@ bool FilterStart::prior(const Frame& frame, NavState& x, StateCov& P, double& ac
   return true;
 }
 
+std::vector<Vec3> FilterStart::constrainedMapDirections() const {
+  Mat3 H = Mat3::Zero();
+  map_->forEachPlane([&H](const VoxelKey&, const Plane& pl) {
+    if (pl.is_plane) H += double(pl.num_points) * pl.normal * pl.normal.transpose();
+  });
+  return constrainedDirections(H, H.trace(), kConstrainedShare);
+}
+
 double FilterStart::constrainedVelocitySigma(const StateCov& P, const std::vector<Vec3>& normals) {
   Mat3 M = Mat3::Zero();
   for (const Vec3& n : normals) M += n * n.transpose();
@@ -147,42 +155,16 @@ Vec3 FilterStart::searchPosition(const NavState& x, const std::vector<BodyPoint>
   std::vector<Vec3> q;  // at most 512 points, spread over the sweep: the cost is points x candidates
   const double stride = std::max(1.0, double(pts.size()) / 512.0);
   for (double i = 0; i < double(pts.size()); i += stride) q.push_back(x.R_world_imu * pts[std::size_t(i)].p_imu);
-  const OccupancyPyramid::Result best = occupancy_.search(q, x.p_world_imu, radius);
-  const Vec3 offset = best.t - x.p_world_imu;
-  // Within two fine cells the search is no better than the prediction, nor where it scores no more.
-  // Along a direction the map leaves free (a corridor's axis) the scores are flat but for the scan
-  // pattern's sampling: the caller registers from both and keeps the better registration.
+  const Vec3 offset = occupancy_.search(q, x.p_world_imu, radius).t - x.p_world_imu;
+  // Within two fine cells the search is no better than the prediction; along a direction the map's
+  // planes leave free (a corridor's axis) its best is the scan pattern's noise.
   if (offset.norm() <= 2.0 * occupancy_.cellSize(0)) return x.p_world_imu;
-  const int at_prediction = occupancy_.score(q, x.p_world_imu, 0);
-  return best.hits > at_prediction ? best.t : x.p_world_imu;
-}
-
-void FilterStart::seed(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace,
-                       const std::vector<BodyPoint>& pts, const NavState& x) {
-  map_->clear();
-  occupancy_.clear();
-  map_scans_ = 0;
-  insert(pts, x, StateCov::Zero());
-  origin_sweep_ = sweep;
-  origin_trace_ = trace;
-  origin_x_ = x;
-}
-
-void FilterStart::rebuildOrigin(const Vec3& dv) {
-  std::vector<ImuTracePoint> tr = origin_trace_;
-  std::vector<BodyPoint> pts;
-  reundistort(origin_sweep_, tr, dv, pts);
-  map_->clear();
-  occupancy_.clear();
-  map_scans_ = 0;
-  insert(pts, origin_x_, StateCov::Zero());
+  Vec3 along = Vec3::Zero();
+  for (const Vec3& d : constrainedMapDirections()) along += d * d.dot(offset);
+  return x.p_world_imu + along;
 }
 
 void FilterStart::insert(const std::vector<BodyPoint>& pts, const NavState& x, const StateCov& P) {
-  if (++map_scans_ > 1) {  // the start map is no longer one scan: its sweep is not kept
-    origin_sweep_ = LidarScan{};
-    origin_trace_.clear();
-  }
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   const WorldPointCovariance point_cov(x, P);
@@ -192,16 +174,6 @@ void FilterStart::insert(const std::vector<BodyPoint>& pts, const NavState& x, c
     occupancy_.insert(q + x.p_world_imu);
   }
   map_->insert(world);
-}
-
-void FilterStart::reundistort(const LidarScan& sweep, std::vector<ImuTracePoint>& trace, const Vec3& dv,
-                              std::vector<BodyPoint>& points) const {
-  const Utime t_end = trace.back().utime;
-  for (auto& tp : trace) {
-    tp.p_world_imu -= dv * toSeconds(t_end - tp.utime);
-    tp.v_world += dv;
-  }
-  points = prepareScan(sweep, trace, T_imu_lidar_, lio_);
 }
 
 FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan& sweep,
@@ -215,7 +187,7 @@ FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan&
       std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(P.block<3, 3>(sidx::kVel, sidx::kVel)).eigenvalues().maxCoeff());
   if (points.empty()) return st;
   if (map_->numRootVoxels() == 0) {  // the first scan: the start map's origin
-    seed(sweep, trace, points, x);
+    insert(points, x, StateCov::Zero());
     map_smear_m_ = sv_prior * T;
     registered_since_reseed_ = 0;
     return st;
@@ -225,94 +197,31 @@ FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan&
   const double dt = sweepSeconds(trace);
   const double sp =
       std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(P_prop.block<3, 3>(sidx::kPos, sidx::kPos)).eigenvalues().maxCoeff());
-  Vec3 v_shift = Vec3::Zero();  // velocity change the scan's trace was corrected by
+  Vec3 v_shift = Vec3::Zero();  // velocity change the trace was corrected by
   LioUpdateResult u;
-  const std::vector<ImuTracePoint> trace0 = trace;
-  // One registration from velocity hypothesis dv (relative to the prior's): the scan -- and, while the
-  // start map is one scan whose sweep is kept, that scan too -- undistorted with it, the update started
-  // where it puts the rig, then again with the velocity the update gives (at most 3 rounds).
-  const bool one_scan = map_scans_ == 1 && !origin_trace_.empty();
-  const double since_origin = one_scan ? std::max(1e-3, toSeconds(x_prop.utime - origin_x_.utime)) : dt;
-  const auto registerFrom = [&](const Vec3& dv0, NavState& xh, StateCov& Ph, std::vector<BodyPoint>& pts,
-                                std::vector<ImuTracePoint>& tr, Vec3& total, int& rounds) {
-    LioUpdateResult uh;
-    total = dv0;
-    for (int round = 0; round < 3; ++round) {
-      rounds = round + 1;
-      tr = trace0;
-      if (total.isZero()) pts = points;
-      else reundistort(sweep, tr, total, pts);
-      if (one_scan) rebuildOrigin(total);
-      xh = x_prop;
-      Ph = P_prop;
-      NavState lin = x_prop;
-      lin.p_world_imu += total * since_origin;
-      uh = lidarUpdate(xh, Ph, pts, *map_, lio_, pool, &lin);
-      if (uh.matched < min_matches_ || (!one_scan && map_smear_m_ > 3.0 * tol)) break;
-      const Vec3 d = xh.v_world - (x_prop.v_world + total);
-      if (d.norm() * T <= 0.5 * tol) break;
-      total += d;
-    }
-    return uh;
-  };
-  // Hypotheses: the prior's velocity, and (while the position is uncertain beyond half a voxel, the
-  // basin of point-to-plane) the velocity the correlative search's best implies; the one whose
-  // registration matches more points wins (ties: the prior's).
-  std::vector<Vec3> hypotheses{Vec3::Zero()};
-  if (3.0 * sp > 0.5 * map_cfg_.voxel_size_m) {
-    const Vec3 found = searchPosition(x_prop, points, std::min(3.0 * sp, cfg_.max_speed_mps * std::max(since_origin, 0.01)));
-    if (found != x_prop.p_world_imu) hypotheses.push_back((found - x_prop.p_world_imu) / since_origin);
-  }
-  Vec3 best_shift = Vec3::Zero();
-  std::vector<BodyPoint> best_points;
-  std::vector<ImuTracePoint> best_trace;
-  std::vector<std::pair<int, NavState>> outcomes;  // (matched, posterior) per hypothesis
-  std::vector<double> outcome_sigma;
-  for (const Vec3& h : hypotheses) {
-    NavState xh;
-    StateCov Ph;
-    std::vector<BodyPoint> pts;
-    std::vector<ImuTracePoint> tr;
-    Vec3 shift;
-    int rounds = 0;
-    const LioUpdateResult uh = registerFrom(h, xh, Ph, pts, tr, shift, rounds);
-    if (uh.matched >= min_matches_) {
-      outcomes.emplace_back(uh.matched, xh);
-      outcome_sigma.push_back(std::sqrt(
-          Eigen::SelfAdjointEigenSolver<Mat3>(Ph.block<3, 3>(sidx::kPos, sidx::kPos)).eigenvalues().maxCoeff()));
-    }
-    if (best_points.empty() || uh.matched > u.matched) {
-      u = uh;
-      x = xh;
-      P = Ph;
-      best_points = std::move(pts);
-      best_trace = std::move(tr);
-      best_shift = shift;
-      st.rounds = rounds;
-    }
-  }
-  // Two registrations that match about as many points (within 10 %) at places their own sigmas tell
-  // apart: the scan does not say where the rig is (a blurred first scan along a street's axis). The
-  // frame observes nothing; the prior stands and the next frame, farther along, decides.
-  bool ambiguous = false;
-  if (outcomes.size() == 2) {
-    const double gap = (outcomes[0].second.p_world_imu - outcomes[1].second.p_world_imu).norm();
-    const int lo = std::min(outcomes[0].first, outcomes[1].first), hi = std::max(outcomes[0].first, outcomes[1].first);
-    ambiguous = gap > 3.0 * (outcome_sigma[0] + outcome_sigma[1]) && 10 * lo >= 9 * hi;
-  }
-  if (ambiguous) {
-    ++ambiguous_;
+  for (int round = 0; round < 4; ++round) {
     x = x_prop;
     P = P_prop;
-    if (one_scan) rebuildOrigin(Vec3::Zero());
-    st.matched = u.matched;
-    last_matched_ = u.matched;
-    return st;
+    st.rounds = round + 1;
+    NavState lin = x_prop;
+    // Predicted position uncertain beyond half a voxel: the basin of point-to-plane is about a voxel.
+    if (3.0 * sp > 0.5 * map_cfg_.voxel_size_m)
+      lin.p_world_imu = searchPosition(x_prop, points, std::min(3.0 * sp, cfg_.max_speed_mps * std::max(dt, 0.01)));
+    u = lidarUpdate(x, P, points, *map_, lio_, pool, &lin);
+    if (u.matched < min_matches_) break;
+    // The sweep was undistorted with the prior's velocity: again with the posterior's when they differ
+    // by more than a return's noise over the sweep.
+    const Vec3 dv = x.v_world - (x_prop.v_world + v_shift);
+    if (dv.norm() * T <= 0.5 * tol || round == 3) break;
+    v_shift += dv;
+    const Utime t_end = trace.back().utime;
+    for (auto& tp : trace) {
+      tp.p_world_imu -= dv * toSeconds(t_end - tp.utime);
+      tp.v_world += dv;
+    }
+    points = prepareScan(sweep, trace, T_imu_lidar_, lio_);
+    if (points.empty()) break;
   }
-  points = std::move(best_points);
-  trace = std::move(best_trace);
-  v_shift = best_shift;
-  if (one_scan) rebuildOrigin(v_shift);  // the start map as the chosen hypothesis undistorts it
   st.matched = u.matched;
   st.iterations = u.iterations;
   st.rms_residual_m = u.rms_residual_m;
@@ -339,15 +248,6 @@ FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan&
   }
   st.registered = true;
   ++registered_;
-  // The scan undistorted with the posterior's velocity (for a start map made from it).
-  const auto sharpen = [&] {
-    const Vec3 dv = x.v_world - (x_prop.v_world + v_shift);
-    if (dv.norm() * T <= 0.5 * tol) return;
-    v_shift += dv;
-    std::vector<BodyPoint> sharp;
-    reundistort(sweep, trace, dv, sharp);
-    if (!sharp.empty()) points = std::move(sharp);
-  };
   st.matched_index = u.matched_index;
   st.matched_normals = u.matched_normals;
   const double sigma_v = constrainedVelocitySigma(P, u.matched_normals);
@@ -359,41 +259,12 @@ FilterStart::Step FilterStart::update(NavState& x, StateCov& P, const LidarScan&
   const double bound = settled ? 3.0 * tol : tol;
   last_sigma_v_ = sigma_v;
   last_smear_m_ = st.smear_m;
-  // The registration against the prediction, in the directions the planes constrain: once the
-  // velocity is known, the next frame's prediction must agree with its fix (chi-square at 0.999 of the
-  // innovation over the prior's and the posterior's position covariance). A registration that slid
-  // into a wrong minimum gives a velocity its next fix refutes.
-  Mat3 M = Mat3::Zero();
-  for (const Vec3& n : u.matched_normals) M += n * n.transpose();
-  const std::vector<Vec3> dirs = constrainedDirections(M, double(u.matched_normals.size()), kConstrainedShare);
-  const Mat3 S = P_prop.block<3, 3>(sidx::kPos, sidx::kPos) + P.block<3, 3>(sidx::kPos, sidx::kPos);
-  const Vec3 innovation = x.p_world_imu - x_prop.p_world_imu;
-  double chi2 = 0.0;
-  for (const Vec3& d : dirs) chi2 += std::pow(d.dot(innovation), 2) / std::max(d.dot(S * d), 1e-12);
-  static constexpr double kChi2_999[] = {0.0, 10.83, 13.82, 16.27};
-  const bool consistent = chi2 <= kChi2_999[dirs.size()];
-  const bool tested = constrainedVelocitySigma(P_prop, u.matched_normals) * T <= bound;
-  last_chi2_ = chi2;
-  if (tested && !consistent) {
-    // The velocity the filter was sure of is refuted: it is unknown again (its prior), and the start
-    // map restarts from this scan, at this fix.
-    ++refuted_;
-    using namespace sidx;
-    P.block<3, kStateDim>(kVel, 0).setZero();
-    P.block<kStateDim, 3>(0, kVel).setZero();
-    const double sv = 0.5 * cfg_.max_speed_mps;
-    P.block<3, 3>(kVel, kVel) = Mat3::Identity() * sv * sv;
-    sharpen();
-    seed(sweep, trace, points, x);
-    map_smear_m_ = sv * T;
-    last_smear_m_ = -1.0;
-    return st;
-  }
-  st.observed = tested && consistent && map_smear_m_ <= bound && st.smear_m <= bound;
+  st.observed = map_smear_m_ <= bound && st.smear_m <= bound;
   if (st.observed) return st;
   if (map_smear_m_ > 2.0 * st.smear_m + tol) {  // this scan is a better start map than the map
-    sharpen();
-    seed(sweep, trace, points, x);
+    map_->clear();
+    occupancy_.clear();
+    insert(points, x, StateCov::Zero());
     map_smear_m_ = st.smear_m;
   } else {
     insert(points, x, StateCov::Zero());
@@ -406,8 +277,6 @@ std::string FilterStart::status() const {
   std::ostringstream os;
   os.precision(3);
   os << "starting: " << registered_ << " of " << frames_ << " frames registered";
-  if (refuted_ > 0) os << ", " << refuted_ << " velocities refuted by the next fix (last chi-square " << last_chi2_ << ")";
-  if (ambiguous_ > 0) os << ", " << ambiguous_ << " frames whose scan fitted two places alike";
   if (last_matched_ >= 0 && last_matched_ < min_matches_)
     os << " (last: " << last_matched_ << " points matched a plane, " << min_matches_ << " needed)";
   if (last_sigma_v_ >= 0)

@@ -23,10 +23,7 @@
 // constrain only. When the update moves the velocity, the sweep is undistorted again with the new
 // one (up to 3 rounds). The start map is rebuilt from the current scan whenever that scan's smear
 // (the velocity sigma times the sweep's duration) is well below the map's.
-// A velocity the filter is sure of is tested by the next frame: its fix must agree with the
-// prediction (chi-square at 0.999 in the constrained directions); one that does not was a wrong
-// minimum, and the velocity goes back to its prior sigma (the start map restarts at that fix).
-// The start is observed when a tested, consistent scan registered against a start map whose smear, like its own, is
+// The start is observed when a scan registered against a start map whose smear, like its own, is
 // below a LiDAR return's range noise (or below three of them once it stops shrinking: a noisy IMU
 // keeps that much velocity doubt between frames), in the directions the matched planes constrain: along a
 // corridor's axis the LiDAR is no evidence of motion or rest, and there the velocity keeps the sigma
@@ -94,15 +91,9 @@ class FilterStart {
  private:
   /// Position search within `radius` of x's, along the start map's constrained directions.
   Vec3 searchPosition(const NavState& x, const std::vector<BodyPoint>& pts, double radius) const;
+  /// Directions (columns) the start map's planes constrain.
+  std::vector<Vec3> constrainedMapDirections() const;
   void insert(const std::vector<BodyPoint>& pts, const NavState& x, const StateCov& P);
-  /// The start map restarts from this scan alone (its sweep and trace kept: rebuildOrigin).
-  void seed(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace, const std::vector<BodyPoint>& pts,
-            const NavState& x);
-  /// The one-scan start map again, its sweep undistorted with a velocity dv above its trace's.
-  void rebuildOrigin(const Vec3& dv);
-  /// The trace moved to a velocity dv higher (positions relative to its end) and the sweep prepared again.
-  void reundistort(const LidarScan& sweep, std::vector<ImuTracePoint>& trace, const Vec3& dv,
-                   std::vector<BodyPoint>& points) const;
   /// Largest velocity sigma along the directions the normals constrain, m/s.
   static double constrainedVelocitySigma(const StateCov& P, const std::vector<Vec3>& normals);
 
@@ -116,19 +107,13 @@ class FilterStart {
   std::unique_ptr<VoxelMap> map_;
   OccupancyPyramid occupancy_;
   double map_smear_m_ = 0.0;   ///< the worst smear sigma of the scans in the start map
-  int map_scans_ = 0;          ///< scans in the start map
-  LidarScan origin_sweep_;     ///< while the start map is one scan: its sweep, trace and pose
-  std::vector<ImuTracePoint> origin_trace_;
-  NavState origin_x_;
   int registered_since_reseed_ = 0;
   int registered_ = 0, frames_ = 0;
   Utime start_utime_ = 0;
   std::string prior_message_;
   // The last frame's figures (status()).
   int last_matched_ = -1;
-  double last_smear_m_ = -1.0, last_sigma_v_ = -1.0, last_chi2_ = 0.0;
-  int refuted_ = 0;  ///< velocities a later fix refuted
-  int ambiguous_ = 0;  ///< frames whose registrations from two hypotheses fitted two places alike
+  double last_smear_m_ = -1.0, last_sigma_v_ = -1.0;
 };
 
 }  // namespace livo
