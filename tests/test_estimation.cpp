@@ -3,6 +3,7 @@
 // scans. The IMU (propagation, initialisation, its config) is in test_estimation_imu.cpp.
 // livo-test-deps: livo_map livo_eval
 #include "livo/estimation/imu.hpp"
+#include "livo/estimation/imu_init.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/estimation/state.hpp"
 #include "livo/eval/tum.hpp"

@@ -1,7 +1,8 @@
 // libs/estimation IMU: propagation (transition matrix vs numeric differences, exact motion, real EuRoC
-// IMU vs ground truth) and the IMU config's checks. The filter's start is in test_estimation_start.cpp.
+// IMU vs ground truth), static initialisation from the configured noise, and the IMU config's checks.
 // livo-test-deps: livo_eval
 #include "livo/estimation/imu.hpp"
+#include "livo/estimation/imu_init.hpp"
 #include "livo/estimation/state.hpp"
 #include "livo/eval/tum.hpp"
 
@@ -99,6 +100,110 @@ TEST(Imu, PropagationOfExactConstantMotion) {
   EXPECT_TRUE(P.allFinite());
 }
 
+namespace {
+
+/// A sample of an IMU at rest at attitude R_world_imu with white noise of the given per-sample sigmas
+/// (rad/s, and m/s^2 before the unit scale `unit`), constant gyro bias `bg`.
+ImuSample restingSample(Utime t, const Mat3& R_world_imu, const Vec3& bg, double sigma_g, double sigma_a, double unit,
+                        std::mt19937& rng) {
+  std::normal_distribution<double> n(0, 1);
+  const Vec3 up_body = R_world_imu.transpose() * Vec3::UnitZ();
+  ImuSample s;
+  s.utime = t;
+  s.gyro = bg + sigma_g * Vec3(n(rng), n(rng), n(rng));
+  s.accel = (up_body * 9.81 + sigma_a * Vec3(n(rng), n(rng), n(rng))) / unit;
+  return s;
+}
+
+/// The sample sigma of a configured density at 200 Hz.
+double perSample(double density) { return density * std::sqrt(200.0); }
+
+}  // namespace
+
+TEST(Imu, StaticInitialisationDetectsGUnitsAndBias) {
+  ImuConfig cfg;  // 200 Hz, init_static_wait_s 1
+  ImuInitializer init(cfg);
+  std::mt19937 rng(4);
+  const Mat3 R_world_imu = expSO3(Vec3(0.1, -0.2, 0.7));  // tilted IMU
+  const Vec3 bg(0.01, -0.02, 0.005);
+  int k = 0;
+  for (; k < 400 && !init.done(); ++k)
+    init.add(restingSample(1000 + k * 5000, R_world_imu, bg, perSample(cfg.gyro_noise), perSample(cfg.accel_noise),
+                           9.81, rng));  // Livox-like: g units
+  ASSERT_TRUE(init.done());
+  EXPECT_EQ(k, 201) << "decided when the wait (1 s after the first sample) is over";
+  EXPECT_NEAR(init.accelScale(), 9.81, 0.05);
+  const NavState x0 = init.initialState();
+  // The gyro bias is the window mean: within 4 sigma of sigma_gyro / sqrt(n) per axis.
+  const double sigma_bg = perSample(cfg.gyro_noise) / std::sqrt(double(cfg.init_samples));
+  EXPECT_LT((x0.bg - bg).cwiseAbs().maxCoeff(), 4 * sigma_bg);
+  const StateCov P = init.initialCovariance();
+  EXPECT_NEAR(std::sqrt(P(sidx::kBg, sidx::kBg)), sigma_bg, 0.05 * sigma_bg) << "the prior says what was observed";
+  // Gravity aligned: the measured up direction maps to world +z.
+  const Vec3 up_body = R_world_imu.transpose() * Vec3::UnitZ();
+  const double sigma_tilt = perSample(cfg.accel_noise) / (9.81 * std::sqrt(double(cfg.init_samples)));
+  EXPECT_NEAR((x0.R_world_imu * up_body - Vec3::UnitZ()).norm(), 0.0, 4 * sigma_tilt);
+  EXPECT_NEAR((x0.g_world - Vec3(0, 0, -9.81)).norm(), 0.0, 1e-9);
+}
+
+// The static test follows the configured noise: a consumer-grade IMU (10x the densities) at rest
+// passes when its config says so, and fails when the config claims the quiet IMU; a rotating IMU
+// never passes, however long it runs.
+TEST(Imu, StaticTestThresholdsFollowTheConfiguredNoise) {
+  ImuConfig quiet;
+  ImuConfig noisy = quiet;
+  noisy.gyro_noise *= 10;
+  noisy.accel_noise *= 10;
+  EXPECT_NEAR(noisy.staticGyroThreshold() / quiet.staticGyroThreshold(), 10.0, 1e-9);
+  const auto feed = [](ImuInitializer& init, const ImuConfig& truth, int n, bool rotating, std::mt19937& rng) {
+    for (int k = 0; k < n && !init.done(); ++k) {
+      ImuSample s = restingSample(k * 5000, Mat3::Identity(), Vec3::Zero(), perSample(truth.gyro_noise),
+                                  perSample(truth.accel_noise), 1.0, rng);
+      if (rotating) s.gyro.x() += 3.0 * std::sin(k * 0.2);  // a hand shaking the rig at 6 Hz
+      init.add(s);
+    }
+  };
+  std::mt19937 rng(11);
+  ImuInitializer right(noisy);
+  feed(right, noisy, 400, false, rng);
+  EXPECT_TRUE(right.done()) << "consumer IMU at rest, configured as such";
+  ImuInitializer wrong(quiet);
+  feed(wrong, noisy, 400, false, rng);
+  EXPECT_FALSE(wrong.done()) << "10x the configured noise is not rest";
+  EXPECT_TRUE(wrong.noStaticWindow());
+  ImuInitializer moving(noisy);
+  feed(moving, noisy, 2000, true, rng);
+  ImuInitializer turning(quiet);  // a steady turn is calm, but its mean rate is no gyro bias
+  for (int k = 0; k < 400; ++k) {
+    ImuSample s = restingSample(k * 5000, Mat3::Identity(), Vec3::Zero(), perSample(quiet.gyro_noise),
+                                perSample(quiet.accel_noise), 1.0, rng);
+    s.gyro.z() += 0.3;
+    turning.add(s);
+  }
+  EXPECT_FALSE(turning.done());
+  EXPECT_FALSE(moving.done()) << "a window in motion is never used";
+  EXPECT_TRUE(moving.noStaticWindow());
+}
+
+// Of the static windows, the calmest is used: half a second of rest under vibration close to the
+// margin, then calm rest with another gyro bias (e.g. a motor switched off): the bias of the calm part.
+TEST(Imu, TheCalmestStaticWindowIsUsed) {
+  ImuConfig cfg;
+  cfg.init_vibration_gyro_rad_s = 0.2;  // the rig's documented vibration at rest
+  ImuInitializer init(cfg);
+  std::mt19937 rng(5);
+  const Vec3 bg_vibrating(0.05, 0.0, 0.0), bg_calm(0.01, -0.02, 0.0);
+  int k = 0;
+  for (; k < 400 && !init.done(); ++k) {
+    const bool vibrating = k < 100;
+    init.add(restingSample(k * 5000, Mat3::Identity(), vibrating ? bg_vibrating : bg_calm,
+                           vibrating ? 0.08 : perSample(cfg.gyro_noise), perSample(cfg.accel_noise), 1.0, rng));
+  }
+  ASSERT_TRUE(init.done());
+  const double sigma_bg = perSample(cfg.gyro_noise) / std::sqrt(double(cfg.init_samples));
+  EXPECT_LT((init.initialState().bg - bg_calm).cwiseAbs().maxCoeff(), 4 * sigma_bg) << init.describe();
+}
+
 // Real IMU: EuRoC V1_01 (ADIS16448, 200 Hz) propagated for 1 s from the ground-truth state stays
 // within the drift expected from its noise.
 TEST(Imu, EurocPropagationAgainstGroundTruth) {
@@ -185,12 +290,5 @@ TEST(ImuConfig, RefusesZeroOrAbsurdDensitiesAndTheRemovedKey) {
   EXPECT_NE(imuConfigError("imu:\n  accel_noise: 20\n").find("imu.accel_noise"), std::string::npos);
   const std::string removed = imuConfigError("imu:\n  init_max_samples: 2000\n");
   EXPECT_NE(removed.find("imu.init_max_samples"), std::string::npos) << removed;
-  EXPECT_NE(removed.find("init_samples"), std::string::npos) << removed;
-  // The start's tree of rules is gone (issue 41): its keys say so and what replaced them.
-  for (const char* key : {"init_static_wait_s: 1.0", "init_deadline_s: 1.5", "init_vibration_accel_mps2: 0.1",
-                          "init_motion_min_updates: 5"}) {
-    const std::string e = imuConfigError(std::string("imu:\n  ") + key + "\n");
-    EXPECT_NE(e.find("was removed (issue 41)"), std::string::npos) << key << ": " << e;
-  }
-  EXPECT_NE(imuConfigError("imu:\n  init_motion_max_speed_mps: 10\n").find("renamed init_max_speed_mps"), std::string::npos);
+  EXPECT_NE(removed.find("init_static_wait_s"), std::string::npos) << removed;
 }

@@ -150,7 +150,6 @@ diagnostic_msgs::DiagnosticStatus estimatorStatus(const livo::OdometryOutput* od
     d.level = static_cast<std::int8_t>(std::max<int>(d.level, level));
   };
   flag(os::kInitializing, "initializing", diagnostic_msgs::DiagnosticStatus::WARN);
-  flag(os::kStarting, "starting (pose not yet trusted)", diagnostic_msgs::DiagnosticStatus::WARN);
   flag(os::kDegenerate, "LiDAR degenerate", diagnostic_msgs::DiagnosticStatus::WARN);
   flag(os::kMapTimeout, "map answer timed out", diagnostic_msgs::DiagnosticStatus::WARN);
   flag(os::kLidarFailed, "LiDAR update failed", diagnostic_msgs::DiagnosticStatus::ERROR);

@@ -79,7 +79,7 @@ class LoopRun {
   LoopRun(const LoopConfig& cfg, std::string save_map) : cfg_(cfg), closer_(cfg), save_map_(std::move(save_map)) {}
 
   void add(const Frame& frame, const FrameResult& r) {
-    if (!r.lio.initialized || r.lio.starting) return;  // a start not yet observed makes no keyframe
+    if (!r.lio.initialized) return;
     const Pose T = r.lio.state.pose();
     closer_.add(frame.utime, T, [&] { return worldPoints(r, T); });
     frames_.push_back({frame.utime, T});
@@ -127,7 +127,7 @@ class PriorMapRun {
   /// Returns what to tell the user about this frame ("" when nothing).
   std::string add(const Frame& frame, const FrameResult& r) {
     if (first_frame_ < 0) first_frame_ = frame.utime;
-    if (!r.lio.initialized || r.lio.starting) return {};
+    if (!r.lio.initialized) return {};
     const Pose T = r.lio.state.pose();
     const RelocaliseStep st = reloc_.add(frame.utime, T, [&] { return worldPoints(r, T); });
     frames_.push_back({frame.utime, T});
@@ -207,22 +207,16 @@ class FrameSink {
 
   void operator()(const Frame& frame, const FrameResult& r) {
     if (stop_) return;
-    if (!args_.no_maps && r.lio.initialized && !r.lio.starting && !r.lio.points.empty()) addToMaps(frame, r);
+    if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
     outputs_.addFrame(record(frame, r));
     if (loop) loop->add(frame, r);
     if (prior)
       if (const std::string msg = prior->add(frame, r); !msg.empty() && !args_.quiet) progress_.message(msg);
-    health.addFrame(frame.utime, r.lio.initialized, r.lio.starting, r.lidarFailed(), r.visual_used, r.degenerate);
+    health.addFrame(frame.utime, r.lio.initialized, r.lidarFailed(), r.visual_used, r.degenerate);
     explain(frame, r);
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
       progress_.message("livo-run: " + pipeline_.odometry().initMessage());
       announced_init_ = true;
-    }
-    if (r.lio.initialized && !r.lio.starting && !announced_observed_ && !args_.quiet) {
-      const std::string& m = pipeline_.odometry().initMessage();
-      const std::size_t at = m.find("Start observed");
-      if (at != std::string::npos) progress_.message("livo-run: " + m.substr(at));
-      announced_observed_ = true;
     }
     if (r.lidarFailed()) counters_["lio_failed_frames"] += 1;
     if (r.reset_time_offset) counters_["camera_time_offset_resets"] += 1;
@@ -287,7 +281,6 @@ class FrameSink {
     FrameRecord rec;
     rec.utime = frame.utime;
     rec.has_pose = r.lio.initialized;
-    rec.starting = r.lio.starting;
     rec.T_world_imu = r.lio.state.pose();
     applyStats(rec, frameStats(r, frame.utime, 0, 0));  // the row the four processes write (frame_row.hpp)
     rec.map_bytes = map_bytes_(r);
@@ -303,7 +296,6 @@ class FrameSink {
   MapBytes map_bytes_;
   bool stop_ = false;
   bool announced_init_ = false;
-  bool announced_observed_ = false;
 };
 
 /// Decodes and validates one log event of a sensor channel and feeds it to the pipeline. False when it

@@ -51,10 +51,9 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   ++frames_;
   Image scratch;
   const Image* gray = frameImage(frame, scratch, r);
-  // 1. The start, propagation, undistortion, downsampling (nothing to estimate before the start has
-  // its samples); while starting, the start's own registration: the pose is `initialising`, the scan
-  // stays out of the map and the camera waits (filter_start.hpp).
-  if (lio_.predict(frame, r.lio, pool_.get()) && !r.lio.starting) {
+  // 1. Initialisation, propagation, undistortion, downsampling (nothing to estimate before the IMU
+  // is initialised or inside its window).
+  if (lio_.predict(frame, r.lio)) {
     // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
     const PlaneFinder& planes = map.planesFor(frame, r.lio);
     lidarStep(map, planes, r);

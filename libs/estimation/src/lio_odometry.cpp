@@ -14,7 +14,7 @@ namespace livo {
 
 void LioOdometryConfig::load(const ConfigNode& root, const PreprocessConfig& pre) {
   imu.load(root.section("imu"), pre.imu_rate_hz);
-  start.load(root.section("imu"));
+  motion_init.load(root.section("imu"));
   lio.load(root);
   map.load(root.section("voxel_map"));
   const ConfigNode lidar = root.section("lidar");
@@ -23,17 +23,90 @@ void LioOdometryConfig::load(const ConfigNode& root, const PreprocessConfig& pre
   root.section("lio").get("min_matches", min_matches);
 }
 
-LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(cfg)), filter_(filter) {
-  start_ = std::make_unique<FilterStart>(cfg_.imu, cfg_.start, cfg_.map, cfg_.lio, cfg_.min_matches, cfg_.T_imu_lidar);
+LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(cfg)), filter_(filter), init_(cfg_.imu) {
+  motion_ = std::make_unique<MotionInitializer>(cfg_.imu, cfg_.motion_init, cfg_.map, cfg_.lio, cfg_.min_matches,
+                                                cfg_.T_imu_lidar);
+}
+
+LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
+  for (const auto& s : frame.imu) {
+    if (s.utime <= last_imu_fed_) continue;
+    last_imu_fed_ = s.utime;
+    if (init_.add(s)) break;  // the rest of the frame's samples are propagated below
+  }
+  // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
+  const bool motion_converged = motion_->process(frame);
+  const bool deadline = init_.firstSampleTime() >= 0 &&
+                        toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds();
+  if (init_.done()) {
+    switch (confirmRest(frame)) {
+      case Rest::Confirmed:
+      case Rest::Unconfirmable: initAtRest(frame); return InitStep::AtRest;
+      case Rest::Moved: init_.reject(); break;  // constant velocity looked like rest to the IMU
+      case Rest::Unknown:
+        if (!deadline) return InitStep::Waiting;
+        initAtRest(frame);  // the deadline: the IMU's decision stands
+        return InitStep::AtRest;
+    }
+  }
+  // From motion, once the static search has given up (a static window observes the gyro bias).
+  if (motion_converged && init_.noStaticWindow()) {
+    NavState x;
+    StateCov P;
+    motion_->takeOver(x, P);
+    filter_.start(x, P, motion_->accelScale());
+    std::ostringstream os;
+    os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
+       << "; " << motion_->describe();
+    init_message_ = os.str();
+    return InitStep::InMotion;
+  }
+  if (deadline && initCoarse(frame)) return InitStep::Coarse;
+  return InitStep::Waiting;
+}
+
+bool LioOdometry::initCoarse(const Frame& frame) {
+  NavState x;
+  double tilt_sigma = 0, accel_scale = 1;
+  StateCov P;
+  if (!init_.coarseState(x, P, tilt_sigma, accel_scale)) return false;
+  const std::string waited = waitMessage();
+  // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
+  Vec3 v_body = Vec3::Zero();
+  const bool have_v = motion_ && motion_->velocityBody(v_body);
+  // Gravity's direction in the map frame is estimated where the LiDAR constrains every direction of
+  // the motion (the accelerations that reveal it are observed); along a wall or a corridor it would
+  // wander with the unconstrained translation, and the tilt stays in the attitude.
+  free_gravity_ = motion_ && motion_->weakestShare() >= MotionInitializer::kConstrainedShare;
+  x.v_world = x.R_world_imu * v_body;
+  // State at the start of this frame's samples (predict() propagates through them).
+  if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
+  P.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-6;  // the origin
+  // Speed: wide. Fixes that agree over two intervals may still slide together along a degenerate
+  // direction (a wall, a corridor's axis), and without them the rig may move at a run's or a drone's
+  // speed; a tight prior there holds a wrong velocity against the camera (random rigs 10 and 12 of the
+  // matrix: 2 m/s instead of 0.3 took rig 10 from 53 m to 0.11 m ATE over 12 s).
+  const double sv = std::max(2.0, 0.5 * v_body.norm());
+  P.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
+  filter_.start(x, P, accel_scale);
+  motion_.reset();
+  std::ostringstream os;
+  os.precision(3);
+  os << "coarse start at the " << cfg_.imu.deadlineSeconds() << " s deadline (" << waited << "): gravity from the mean specific force (tilt sigma "
+     << tilt_sigma * 180.0 / M_PI << " deg), velocity " << (have_v ? "of the last LiDAR fixes" : "0") << " (sigma " << sv
+     << " m/s); the filter refines both";
+  init_message_ = os.str();
+  return true;
 }
 
 bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
   if (initialized_) return false;
   filter_.start(prior.state, prior.P, prior.accel_scale, /*time_offset_prior_in_P=*/true);
   resume_imu_ = std::move(imu);
-  start_.reset();
+  motion_.reset();
   initialized_ = true;
   map_started_ = true;  // the map holds the previous estimator's scans
+  last_imu_fed_ = prior.state.utime;
   std::ostringstream os;
   os.precision(3);
   os << std::fixed << "resumed from " << source << " at t " << toSeconds(prior.state.utime) << " s (position "
@@ -53,29 +126,34 @@ void LioOdometry::recordState(LioFrameResult& r) const {
 }
 
 std::string LioOdometry::waitMessage() const {
-  if (!initialized_) return start_ ? "waiting for " + std::to_string(cfg_.imu.init_samples) + " IMU samples (imu.init_samples)" : "resumed";
-  return start_ ? start_->status() : "initialised";
+  if (initialized_) return "initialised";
+  if (init_.firstSampleTime() < 0) return "no IMU sample yet";
+  std::string m = init_.status();
+  if (motion_) m += "; " + motion_->status();
+  return m;
 }
 
-void LioOdometry::startStep(const Frame& frame, std::vector<ImuTracePoint>& trace, LioFrameResult& r, WorkerPool* pool) {
-  const FilterStart::Step st = start_->update(filter_.x(), filter_.P(), frame.sweep, trace, r.points, pool);
-  r.n_points = static_cast<int>(r.points.size());
-  r.n_matched = st.matched;
-  r.iterations = st.iterations;
-  r.rms_residual_m = st.rms_residual_m;
-  r.sigma_min = st.sigma_min;
-  r.matched_index = st.matched_index;
-  r.matched_normals = st.matched_normals;
-  r.lio_ok = st.registered;
-  r.starting = !st.observed;
-  if (!st.observed) return;
-  std::ostringstream os;
-  os.precision(3);
-  os << init_message_ << ". Start observed after " << start_->frames() << " frames (" << start_->registeredFrames()
-     << " registered): velocity smear " << st.smear_m * 100 << " cm over the sweep, below the range noise; speed "
-     << filter_.x().v_world.norm() << " m/s";
-  init_message_ = os.str();
-  start_.reset();  // this frame's scan seeds the map (scanForMap)
+LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
+  // Rest: the registered positions since the window began stay within 5 sigma of a LiDAR return
+  // (a whole scan registers far better than one return).
+  bool known = false;
+  const bool rest = motion_->atRestSince(init_.windowStart(), 5.0 * cfg_.lio.range_noise_m, known);
+  if (known) {
+    if (rest) return Rest::Confirmed;
+    ++rest_rejections_;
+    return Rest::Moved;
+  }
+  // Without LiDAR registrations for long (no returns, no overlap) the IMU's decision stands.
+  const double waited_s = toSeconds(frame.utime - init_.firstSampleTime());
+  return waited_s > 3.0 * cfg_.imu.init_static_wait_s ? Rest::Unconfirmable : Rest::Unknown;
+}
+
+void LioOdometry::initAtRest(const Frame& frame) {
+  filter_.start(init_.initialState(), init_.initialCovariance(), init_.accelScale());
+  // Through the samples after the chosen window.
+  propagateUpToFrame(init_.samplesAfterWindow(), frame);
+  motion_.reset();
+  init_message_ = init_.describe();
 }
 
 std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
@@ -83,7 +161,7 @@ std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   // The first scan defines the map's frame: its geometry relative to that frame is as exact as the
-  // LiDAR; the pose's uncertainty is the state's, not the map's.
+  // LiDAR; the pose's uncertainty (a coarse start's tilt, the origin) is the state's, not the map's.
   StateCov first_scan_P;
   if (!map_started_) {
     first_scan_P = filter_.P();
@@ -101,31 +179,40 @@ std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
   }
   if (!pts.empty()) {
     r.map_started = !map_started_;
+    if (!map_started_ && free_gravity_) {
+      mapFrameFromFirstScan();
+      r.P = filter_.P();
+    }
     map_started_ = true;
   }
   return world;
 }
 
-bool LioOdometry::predict(const Frame& frame, LioFrameResult& r, WorkerPool* pool) {
+bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r = LioFrameResult{};
   r.utime = frame.utime;
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
   Stopwatch watch;
 
-  // 1a. The start: at once, from the first frame with imu.init_samples samples (filter_start.hpp).
+  // 1a. Initialisation: at rest (gravity, gyro bias, g units) or, without a static window, from motion.
   if (!initialized_) {
-    NavState x;
-    StateCov P;
-    double accel_scale = 1.0;
-    if (!start_->prior(frame, x, P, accel_scale)) return false;
-    filter_.start(x, P, accel_scale);
+    const InitStep step = initialise(frame);
+    if (step == InitStep::Waiting) return false;
     initialized_ = true;
-    init_message_ = start_->describe();
+    if (step == InitStep::InMotion) {  // this frame's points are registered and undistorted already
+      r.initialized = true;
+      r.points = std::move(motion_->points());
+      r.n_points = static_cast<int>(r.points.size());
+      recordState(r);
+      motion_.reset();
+      map_started_ = false;  // the odometry's map starts with this frame's scan
+      r.lio_ms = watch.elapsedMs();
+      return true;
+    }
   }
   r.initialized = true;
-  if (frame.utime <= filter_.x().utime) {  // a frame at or before the state: nothing to estimate
+  if (frame.utime <= filter_.x().utime) {  // a frame inside the initialisation window: nothing to estimate yet
     recordState(r);
-    r.starting = start_ != nullptr;
     return false;
   }
 
@@ -143,9 +230,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r, WorkerPool* poo
   // 1c. Undistort + downsample the sweep, with per-point covariances.
   r.points = prepareScan(frame.sweep, trace, cfg_.T_imu_lidar, cfg_.lio);
   r.n_points = static_cast<int>(r.points.size());
-  // 1d. While starting: the start's registration against its own map (the odometry's map waits).
-  if (start_) startStep(frame, trace, r, pool);
-  recordState(r);  // the prediction until update(); while starting, the start's posterior
+  recordState(r);  // the prediction until update()
   r.lio_ms = watch.elapsedMs();
   return true;
 }
@@ -171,6 +256,26 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
   }
   r.lio_ms += watch.elapsedMs();
   recordState(r);
+}
+
+void LioOdometry::mapFrameFromFirstScan() {
+  // The first scan defines the map's frame at the estimated attitude: relative to the map, that
+  // attitude is exact, and the attitude's tilt uncertainty becomes gravity's (and the velocity's)
+  // direction in the map frame. With R_true = R Exp(dtheta), the map frame is the world rotated by
+  // Exp(R dtheta), so a vector u of the world reads u + [u]x R dtheta in the map frame. Without this
+  // a coarse start's tilt error (up to 15 deg) would stay in the map as a wrong gravity that only the
+  // accelerometer bias could absorb, and only until the rig turns (a car accelerating at 2 m/s^2 at
+  // the deadline, random rig 5's street: 14.7 m ATE over 12 s without, 4 cm with).
+  using namespace sidx;
+  StateCov T = StateCov::Identity();
+  T.block<3, 3>(kRot, kRot).setZero();
+  const NavState& x = filter_.x();
+  StateCov& P = filter_.P();
+  T.block<3, 3>(kGrav, kRot) = hat(x.g_world) * x.R_world_imu;
+  T.block<3, 3>(kVel, kRot) = hat(x.v_world) * x.R_world_imu;
+  T.block<3, 3>(kPos, kRot) = hat(x.p_world_imu) * x.R_world_imu;
+  P = T * P * T.transpose();
+  P.block<3, 3>(kRot, kRot) += Mat3::Identity() * 1e-10;  // positive definite
 }
 
 }  // namespace livo

@@ -94,10 +94,9 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
 }  // namespace
 
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
-                            const LioConfig& cfg, WorkerPool* pool, const NavState* linearise_from) {
+                            const LioConfig& cfg, WorkerPool* pool) {
   LioUpdateResult res;
   const NavState x_prop = x;
-  if (linearise_from != nullptr) x = *linearise_from;
   const StateCov P_prop = P;
   const StateCov P_prop_inv = P_prop.ldlt().solve(StateCov::Identity());
   const double conv_rot = cfg.converge_rot_deg * M_PI / 180.0;

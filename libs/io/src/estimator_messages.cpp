@@ -13,8 +13,7 @@ static_assert(odometry_status::kInitializing == livo::odometry_t::STATUS_INITIAL
                   odometry_status::kVisualUpdate == livo::odometry_t::STATUS_VISUAL_UPDATE &&
                   odometry_status::kMapTimeout == livo::odometry_t::STATUS_MAP_TIMEOUT &&
                   odometry_status::kLidarFailed == livo::odometry_t::STATUS_LIDAR_FAILED &&
-                  odometry_status::kLidarUpdate == livo::odometry_t::STATUS_LIDAR_UPDATE &&
-                  odometry_status::kStarting == livo::odometry_t::STATUS_STARTING,
+                  odometry_status::kLidarUpdate == livo::odometry_t::STATUS_LIDAR_UPDATE,
               "odometry_status must mirror the STATUS_* constants of lcmtypes/livo_odometry_t.lcm");
 
 namespace {

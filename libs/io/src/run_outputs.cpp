@@ -54,7 +54,7 @@ void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bo
 }  // namespace
 
 const char* frameState(const FrameRecord& f) {
-  if (!f.has_pose || f.starting) return "initialising";
+  if (!f.has_pose) return "initialising";
   if (f.lidar_failed) return f.visual_used ? "lidar_failed" : "imu_only";
   return "ok";
 }
@@ -124,7 +124,7 @@ struct FrameTimes {
 
 }  // namespace
 
-void RunHealth::addFrame(Utime t, bool has_pose, bool starting, bool lidar_failed, bool visual_used, bool degenerate) {
+void RunHealth::addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate) {
   if (first_ < 0) first_ = t;
   const double dt = prev_ >= 0 && t > prev_ ? toSeconds(t - prev_) : 0.0;
   prev_ = std::max(prev_, t);
@@ -135,11 +135,6 @@ void RunHealth::addFrame(Utime t, bool has_pose, bool starting, bool lidar_faile
   if (first_pose_ < 0) first_pose_ = t;
   if (last_pose_ >= 0 && t > last_pose_) longest_gap_s = std::max(longest_gap_s, toSeconds(t - last_pose_));
   last_pose_ = std::max(last_pose_, t);
-  if (starting) {
-    initialising_s += dt;
-    return;
-  }
-  if (first_trusted_ < 0) first_trusted_ = t;
   if (lidar_failed) lidar_failed_s += dt;
   if (lidar_failed && !visual_used) imu_only_s += dt;
   if (degenerate) degenerate_s += dt;
@@ -150,7 +145,6 @@ double RunHealth::firstPoseDelaySeconds() const { return first_pose_ < 0 ? -1.0 
 std::string RunHealth::json() const {
   std::ostringstream os;
   os << "{\"first_pose_delay_s\": " << num(firstPoseDelaySeconds()) << ", \"initialising_s\": " << num(initialising_s)
-     << ", \"start_observed_delay_s\": " << num(first_trusted_ < 0 ? -1.0 : toSeconds(first_trusted_ - first_))
      << ", \"lidar_failed_s\": " << num(lidar_failed_s) << ", \"imu_only_s\": " << num(imu_only_s)
      << ", \"degenerate_s\": " << num(degenerate_s) << ", \"longest_pose_gap_s\": " << num(longest_gap_s);
   if (!no_pose_reason.empty()) os << ", \"no_pose_reason\": \"" << jsonEscape(no_pose_reason) << "\"";

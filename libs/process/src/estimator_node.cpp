@@ -335,12 +335,6 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
     *log_ << "livo-estimator: " << pipeline_.odometry().initMessage() << "\n";
     announced_init_ = true;
   }
-  if (!f.lio.starting && !announced_observed_ && log_) {
-    const std::string& m = pipeline_.odometry().initMessage();
-    const std::size_t at = m.find("Start observed");
-    if (at != std::string::npos) *log_ << "livo-estimator: " << m.substr(at) << "\n";
-    announced_observed_ = true;
-  }
 
   OdometryOutput o;
   o.utime = frame.utime;
@@ -353,12 +347,8 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   if (f.link.map_timeout) o.status |= odometry_status::kMapTimeout;
   if (f.lidarFailed()) o.status |= odometry_status::kLidarFailed;
   if (f.lio.lio_ok) o.status |= odometry_status::kLidarUpdate;
-  if (f.lio.starting) o.status |= odometry_status::kStarting;
   lcm_.publish(channels_.odometry, toMsg(o));
   ++counters_.odometry_published;
-  // A start not yet observed has no map to resume against and no trusted scan to publish: a
-  // restarted estimator starts again.
-  if (f.lio.starting) return;
   // The whole filter state, for an estimator that restarts (the map server keeps the latest).
   FilterSnapshot snap;
   snap.filter = pipeline_.filter().snapshot();

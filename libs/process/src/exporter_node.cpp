@@ -78,7 +78,6 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
   rec.utime = t;
   if (p.odom) {
     rec.has_pose = (p.odom->status & odometry_status::kInitializing) == 0;
-    rec.starting = (p.odom->status & odometry_status::kStarting) != 0;
     rec.T_world_imu = p.odom->state.pose();
     rec.degenerate = (p.odom->status & odometry_status::kDegenerate) != 0;
     rec.visual_used = (p.odom->status & odometry_status::kVisualUpdate) != 0;
@@ -92,7 +91,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
   }
   outputs_.addFrame(rec);  // flushed per line
   if (rec.has_pose) odometry_poses_.emplace_back(t, rec.T_world_imu);
-  health_.addFrame(t, rec.has_pose, rec.starting, rec.lidar_failed, rec.visual_used, rec.degenerate);
+  health_.addFrame(t, rec.has_pose, rec.lidar_failed, rec.visual_used, rec.degenerate);
   wrote_any_ = true;
   last_written_ = t;
 }

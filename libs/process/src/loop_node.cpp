@@ -28,7 +28,7 @@ bool LoopNode::accept(Utime t, const char* what) {
 }
 
 void LoopNode::onOdometry(const OdometryOutput& o) {
-  if (o.status & (odometry_status::kInitializing | odometry_status::kStarting)) {  // no trusted pose yet
+  if (o.status & odometry_status::kInitializing) {
     counters_["odometry_initializing"] += 1;
     return;
   }

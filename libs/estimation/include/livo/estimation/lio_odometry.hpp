@@ -6,7 +6,8 @@
 #include "livo/common/modes.hpp"
 #include "livo/estimation/esikf.hpp"
 #include "livo/estimation/imu.hpp"
-#include "livo/estimation/filter_start.hpp"
+#include "livo/estimation/imu_init.hpp"
+#include "livo/estimation/motion_init.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/point_cov.hpp"
@@ -20,7 +21,7 @@ namespace livo {
 
 struct LioOdometryConfig {
   ImuConfig imu;
-  StartConfig start;  ///< keys imu.init_max_* (the filter's start, filter_start.hpp)
+  MotionInitConfig motion_init;  ///< keys imu.init_motion_* (initialisation without a static window)
   LioConfig lio;
   VoxelMapConfig map;
   Pose T_imu_lidar = Pose::Identity();
@@ -35,10 +36,7 @@ struct LioOdometryConfig {
 /// What one frame produced (LiDAR-inertial part).
 struct LioFrameResult {
   Utime utime = 0;
-  bool initialized = false;  ///< false while the start collects its first samples (no pose)
-  /// The filter runs but its start is not observed yet (filter_start.hpp): the pose is written with
-  /// state `initialising`, the scan stays out of the map, no visual update.
-  bool starting = false;
+  bool initialized = false;  ///< false while the IMU initialisation is collecting samples
   bool lio_ok = false;       ///< the LiDAR update ran with enough matches
   bool map_started = false;  ///< this frame created the first map content
   NavState state;            ///< the filter's state at the end of the step that wrote it (a record)
@@ -65,18 +63,19 @@ class LioOdometry {
   LioOdometry(LioOdometryConfig cfg, Esikf& filter);
 
   // The LiDAR-inertial phases of a frame, in this order:
-  /// Step 1: the start (filter_start.hpp) at the first frame with enough samples, propagation to the
-  /// frame time, undistortion and downsampling; while starting, the start's own registration against
-  /// its start map (r.starting stays true until the start is observed; that frame's scan then seeds
-  /// the map). Returns true when r.points wait for update() (r.state holds the prediction); false
-  /// when there is nothing to estimate (too few IMU samples yet).
-  bool predict(const Frame& frame, LioFrameResult& r, WorkerPool* pool = nullptr);
+  /// Step 1: initialisation (at rest: imu_init.hpp; else from motion: motion_init.hpp), propagation
+  /// to the frame time, undistortion and downsampling. Returns true when r.points wait for update()
+  /// (r.state holds the prediction); false when there is nothing to estimate (IMU not initialised
+  /// yet, frame inside the initialisation window).
+  bool predict(const Frame& frame, LioFrameResult& r);
   /// Step 3: the iterated update against `planes` (skipped before the first insertion). Sets r.state,
   /// r.P, r.lio_ms (predict's time plus its own) and the match results. `pool`: threads of the association.
   void update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool = nullptr);
   /// Step 3's insertion: the frame's points in the world with their covariance at the filter's
   /// posterior, for the map. From then on the map holds a scan (update() runs from the next frame on).
-  /// The first scan defines the map frame: its points carry no pose covariance.
+  /// The first scan defines the map frame: its points carry no pose covariance, and after a coarse
+  /// start in geometry that constrains every direction the attitude's tilt uncertainty moves to
+  /// gravity's direction in that frame (mapFrameFromFirstScan; r.P is updated).
   std::vector<PointWithCov> scanForMap(LioFrameResult& r);
 
   /// Starts from another estimator's last state instead of initialising (a restart in the middle of a
@@ -89,27 +88,39 @@ class LioOdometry {
   bool mapStarted() const { return map_started_; }
   const LioOdometryConfig& config() const { return cfg_; }
   bool initialized() const { return initialized_; }
-  bool starting() const { return start_ != nullptr && initialized_; }
-  /// How the filter started (after initialized()), or how it resumed.
+  /// How the IMU was initialised (after initialized()), or what it waits for.
   const std::string& initMessage() const { return init_message_; }
-  /// While not initialized() or starting(): what the start waits for, with the numbers.
+  /// Before initialized(): what the initialisation waits for, with the numbers.
   std::string waitMessage() const;
 
  private:
+  enum class InitStep { Waiting, AtRest, InMotion, Coarse };
+  /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
+  /// propagator when one of them is done.
+  InitStep initialise(const Frame& frame);
+  enum class Rest { Confirmed, Moved, Unknown, Unconfirmable };
+  /// Whether the LiDAR saw the rig at rest during the static window the IMU chose.
+  Rest confirmRest(const Frame& frame);
+  void initAtRest(const Frame& frame);
+  /// The deadline passed (ImuConfig::deadlineSeconds()): start from ImuInitializer::coarseState().
+  bool initCoarse(const Frame& frame);
   /// x_ / P_ through the samples of `samples` after x_'s time and before this frame's own samples
   /// begin (the frame's propagation keeps its trace for the undistortion).
   void propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame);
   /// r.state / r.P: the filter's, as this step leaves them.
   void recordState(LioFrameResult& r) const;
-  /// While starting: the start's registration of this frame (r's match results, r.starting).
-  void startStep(const Frame& frame, std::vector<ImuTracePoint>& trace, LioFrameResult& r, WorkerPool* pool);
 
   LioOdometryConfig cfg_;
   Esikf& filter_;
-  std::unique_ptr<FilterStart> start_;  ///< until the start is observed
+  ImuInitializer init_;
+  std::unique_ptr<MotionInitializer> motion_;  ///< until initialised
   bool initialized_ = false;
+  int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
   std::vector<ImuSample> resume_imu_;  ///< resume(): samples to propagate through before the next frame's
+  Utime last_imu_fed_ = -1;
+  void mapFrameFromFirstScan();
   bool map_started_ = false;
+  bool free_gravity_ = false;  ///< a coarse start where the LiDAR constrains every direction
   std::string init_message_;
 };
 

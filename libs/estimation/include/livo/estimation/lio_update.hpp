@@ -79,10 +79,8 @@ class WorldPointCovariance {
 /// posterior on return. With no match at all the state is left unchanged. With `pool`, the
 /// association runs on its threads in fixed blocks summed in block order: the result is the same for
 /// every thread count, and the same as without a pool.
-/// `linearise_from`: where the iterations start instead of the prior (a correlative search's answer
-/// when the prior is metres wide, filter_start.hpp); the prior stays x's on entry.
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
-                            const LioConfig& cfg, WorkerPool* pool = nullptr, const NavState* linearise_from = nullptr);
+                            const LioConfig& cfg, WorkerPool* pool = nullptr);
 
 /// Degeneracy metric (docs/algorithms.md "The two ideas", 1, and section 9): with M = sum n n^T over the N matched unit
 /// normals (trace N) and lambda_min its smallest eigenvalue, sigma_min = sqrt(lambda_min / N), in

@@ -25,8 +25,7 @@ constexpr std::int32_t kVisualUpdate = 4;
 constexpr std::int32_t kMapTimeout = 8;
 constexpr std::int32_t kLidarFailed = 16;
 constexpr std::int32_t kLidarUpdate = 32;  ///< the LiDAR update was applied to this frame
-constexpr std::int32_t kStarting = 64;  ///< a pose, but the filter's start is not observed yet (filter_start.hpp)
-constexpr std::int32_t kKnownBits = 127;  ///< any other bit set is a validation error
+constexpr std::int32_t kKnownBits = 63;  ///< any other bit set is a validation error
 }  // namespace odometry_status
 
 /// Estimator output per frame (odometry_t). `state.utime` is sent as `utime` (toMsg uses `utime`;

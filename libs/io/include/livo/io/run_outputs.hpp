@@ -36,7 +36,6 @@ namespace livo {
 struct FrameRecord {
   Utime utime = 0;
   bool has_pose = false;  ///< false before initialisation: no trajectory line
-  bool starting = false;  ///< a pose while the filter's start is not observed (state `initialising`)
   Pose T_world_imu = Pose::Identity();
   double lio_ms = 0, vio_ms = 0, map_ms = 0, total_ms = 0;
   double map_wait_ms = 0;  ///< waiting for the map server (frame_row.hpp: what each time covers)
@@ -64,13 +63,11 @@ const char* frameState(const FrameRecord& f);
 
 /// What a run did over time (stats.json section "health"), from its frames in order: the delay from
 /// the first frame to the first pose, the time spent initialising (frames without a pose before the
-/// first, and poses while the filter's start is not observed), the delay to the first pose of an
-/// observed start, with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used) and
+/// first), with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used) and
 /// LiDAR-degenerate, and the longest gap between consecutive poses. A frame counts for the interval
 /// since the previous frame.
 struct RunHealth {
-  /// `starting`: a pose whose start is not observed yet (counts as initialising, not as a gap).
-  void addFrame(Utime t, bool has_pose, bool starting, bool lidar_failed, bool visual_used, bool degenerate);
+  void addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate);
   bool anyPose() const { return first_pose_ >= 0; }
   /// Seconds from the first frame to the first pose (-1 without a pose).
   double firstPoseDelaySeconds() const;
@@ -81,7 +78,6 @@ struct RunHealth {
 
  private:
   Utime first_ = -1, prev_ = -1, first_pose_ = -1, last_pose_ = -1;
-  Utime first_trusted_ = -1;  ///< the first pose whose start was observed (start_observed_delay_s)
 };
 
 /// Map size at the end of a run.

@@ -140,7 +140,6 @@ class EstimatorNode : public MapClient {
   int timeouts_in_row_ = 0;
   Utime last_wait_said_ = -1;  ///< last "no pose yet" line (sensor time)
   bool announced_init_ = false;
-  bool announced_observed_ = false;  ///< the start's "observed" line was logged
   // Resume at start.
   std::int64_t resume_request_id_ = 0;
   bool resume_answered_ = false, started_ = false;
