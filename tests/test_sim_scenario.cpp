@@ -1,6 +1,5 @@
 // libs/sim: the shipped scenarios run and match their rig configs; unknown keys and bad values name the
-// key; the rig config has exactly the keys of the README and nothing of the simulated motion's truth
-// (vibration).
+// key; the rig config has exactly the keys of the README.
 #include "sim_test_util.hpp"
 
 #include "livo/common/config.hpp"
@@ -122,16 +121,4 @@ TEST(SimRig, RigConfigHasExactlyTheReadmeKeys) {
   for (const char* k : {"degeneracy_threshold", "tau_translation_m", "tau_rotation_deg"}) sel.require(k, d);
   sel.require("degenerate_frames", i);
   EXPECT_NO_THROW(f.checkAllKeysUsed());
-}
-
-// The simulated vibration is the motion's truth: the rig config says nothing of it.
-TEST(SimRig, RigConfigCarriesNoVibration) {
-  SimScenario sc = makeScenario("room");
-  std::ostringstream quiet, shaken;
-  writeRigConfig(sc, quiet);
-  sc.imu.vibration.accel_mps2 = 2.0;
-  sc.imu.vibration.gyro_rad_s = 0.05;
-  writeRigConfig(sc, shaken);
-  EXPECT_EQ(quiet.str(), shaken.str());
-  EXPECT_EQ(shaken.str().find("vibration"), std::string::npos);
 }

@@ -45,9 +45,11 @@ void writeRigConfig(const SimScenario& sc, std::ostream& out) {
       << "  gyro_bias_walk: " << num(sc.imu.gyro_bias_walk) << "\n"
       << "  accel_bias_walk: " << num(sc.imu.accel_bias_walk) << "\n"
       << "  time_offset_s: 0.0\n"
-      << "  init_samples: " << init_samples << "\n"
-      // Nothing of imu.vibration: it is the simulated motion's truth, which a rig config does not know.
-      << "\n"
+      << "  init_samples: " << init_samples << "\n";
+  if (sc.imu.vibration.active())  // the rig's vibration at rest, 3-axis RMS (the static test's margin)
+    out << "  init_vibration_gyro_rad_s: " << num(std::sqrt(3.0) * sc.imu.vibration.gyro_rad_s) << "\n"
+        << "  init_vibration_accel_mps2: " << num(std::sqrt(3.0) * sc.imu.vibration.accel_mps2) << "\n";
+  out << "\n"
       << "lidar:\n"
       << "  model: " << sc.lidar.model << "\n"
       << "  T_imu_lidar: " << pose(sc.extrinsics.T_imu_lidar) << "\n"
