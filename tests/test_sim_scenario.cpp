@@ -1,9 +1,11 @@
 // libs/sim: the shipped scenarios run and match their rig configs; unknown keys and bad values name the
-// key; the rig config has exactly the keys of the README.
+// key; the sway and bob defaults follow the motion; the rig config has exactly the keys of the README
+// and nothing of the simulated motion's truth (vibration).
 #include "sim_test_util.hpp"
 
 #include "livo/common/config.hpp"
 #include "livo/sim/simulator.hpp"
+#include "livo/sim/trajectory.hpp"
 
 #include <gtest/gtest.h>
 
@@ -78,6 +80,51 @@ TEST(SimScenario, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_NE(message("rig_map:\n  local_edge_m: -40\n").find("rig_map.local_edge_m"), std::string::npos);
   EXPECT_NE(message("rig_map:\n  slide_m: 4\n").find("rig_map.slide_m"), std::string::npos);
   EXPECT_EQ(message("seed: 3\nworld:\n  kind: wall\n"), "no error");
+}
+
+// trajectory.sway_deg and bob_m default from trajectory.motion (handheld 2 deg and 0.02 m; car and drone
+// none; no motion key: car on a street, handheld elsewhere). A street car with a low turn-rate limit and
+// no sway key, valid before the handheld sway applied to every rig, is valid again.
+TEST(SimScenario, SwayDefaultFollowsTheMotion) {
+  const std::string street =
+      "world:\n  kind: street\n  size_m: [300, 160, 20]\ntrajectory:\n  speed_mps: 8.0\n  max_rot_dps: 16.0\n";
+  for (const std::string motion : {"", "  motion: car\n", "  motion: drone\n"}) {
+    SCOPED_TRACE(motion);
+    const SimScenario sc = parseScenario(street + motion);
+    EXPECT_EQ(sc.trajectory.motionIn(sc.world), motion.empty() ? "car" : motion.substr(10, motion.size() - 11));
+    EXPECT_EQ(sc.trajectory.swayDegIn(sc.world), 0.0);
+    EXPECT_EQ(sc.trajectory.bobMIn(sc.world), 0.0);
+    SimTrajectory tr;
+    ASSERT_NO_THROW(tr = SimTrajectory(sc.trajectory, sc.world));
+    // No sway and no bob: on the flat street loop the body stays level, at the street's carrying height.
+    for (double t = 0.0; t < 60.0; t += 0.37) {
+      const BodyState s = tr.state(t);
+      ASSERT_LT((s.T_world_imu.linear().col(2) - Vec3::UnitZ()).norm(), 1e-12) << "t " << t;
+      ASSERT_NEAR(s.T_world_imu.translation().z(), 1.8, 1e-9) << "t " << t;
+    }
+    EXPECT_GT(tr.peakSpeed(), 7.0);  // it drives
+  }
+  // A handheld rig keeps its 2 deg sway, which leaves too little of 16 deg/s (as before); so does an
+  // explicit sway_deg with a car.
+  for (const std::string extra : {"  motion: handheld\n", "  sway_deg: 2.0\n", "  motion: car\n  sway_deg: 2.0\n"}) {
+    SCOPED_TRACE(extra);
+    const SimScenario sc = parseScenario(street + extra);
+    EXPECT_THROW(SimTrajectory(sc.trajectory, sc.world), ConfigError);
+  }
+  // Elsewhere handheld by default, with the defaults of before.
+  const SimScenario room = parseScenario("world:\n  kind: room\n");
+  EXPECT_EQ(room.trajectory.motionIn(room.world), "handheld");
+  EXPECT_EQ(room.trajectory.swayDegIn(room.world), 2.0);
+  EXPECT_EQ(room.trajectory.bobMIn(room.world), 0.02);
+  const SimScenario drone = parseScenario("world:\n  kind: room\ntrajectory:\n  motion: drone\n  bob_m: 0.01\n");
+  EXPECT_EQ(drone.trajectory.swayDegIn(drone.world), 0.0);
+  EXPECT_EQ(drone.trajectory.bobMIn(drone.world), 0.01);
+  try {
+    parseScenario("trajectory:\n  motion: bicycle\n");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("trajectory.motion"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SimRig, RigConfigHasExactlyTheReadmeKeys) {

@@ -10,8 +10,12 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Carrying height and path extents chosen from the world when the scenario leaves them at 0.
+// Carrying height and path extents chosen from the world when the scenario leaves them at 0; sway and
+// bob from the motion when the scenario leaves them out.
 TrajectoryConfig withDefaults(TrajectoryConfig c, const WorldConfig& w) {
+  c.sway_deg = c.swayDegIn(w);
+  c.bob_m = c.bobMIn(w);
+  c.motion = c.motionIn(w);
   if (c.height_m <= 0.0) c.height_m = w.kind == "street" ? 1.8 : 1.4;
   if (c.center_m.z() == 0.0) c.center_m.z() = c.height_m;
   Vec3 def;
@@ -229,7 +233,7 @@ SimTrajectory::SimTrajectory(const TrajectoryConfig& cfg_in, const WorldConfig& 
 
   // 1. Turn rate per metre (curvature of the horizontal heading), smoothed over ~0.3 m.
   const double max_rot = cfg_.max_rot_dps * kPi / 180.0;
-  const double budget = 0.85 * max_rot - swayRateBound(cfg_.sway_deg * kPi / 180.0);
+  const double budget = 0.85 * max_rot - swayRateBound(*cfg_.sway_deg * kPi / 180.0);
   if (budget < 0.2 * max_rot)
     throw ConfigError("trajectory.max_rot_dps: " + std::to_string(cfg_.max_rot_dps) +
                       " leaves too little turn rate beside the sway (lower trajectory.sway_deg)");

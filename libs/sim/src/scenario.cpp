@@ -20,7 +20,29 @@ void TrajectoryConfig::load(const ConfigNode& n) {
   n.get("max_accel_mps2", max_accel_mps2).get("static_s", static_s).get("ramp_s", ramp_s);
   n.get("size_m", size_m).get("center_m", center_m).get("height_m", height_m);
   n.get("start_m", start_m).get("corner_radius_m", corner_radius_m).get("frequencies", frequencies).get("waypoints", waypoints);
-  n.get("look_at", look_at).get("sway_deg", sway_deg).get("bob_m", bob_m).get("pitch_deg", pitch_deg);
+  n.get("look_at", look_at).get("motion", motion).get("pitch_deg", pitch_deg);
+  // Absent: the motion's default (swayDegIn / bobMIn).
+  for (auto [key, field] : {std::make_pair("sway_deg", &sway_deg), std::make_pair("bob_m", &bob_m)})
+    if (n.has(key)) {
+      double v = 0.0;
+      n.get(key, v);
+      *field = v;
+    }
+}
+
+std::string TrajectoryConfig::motionIn(const WorldConfig& world) const {
+  if (!motion.empty()) return motion;
+  return world.kind == "street" ? "car" : "handheld";
+}
+
+double TrajectoryConfig::swayDegIn(const WorldConfig& world) const {
+  if (sway_deg) return *sway_deg;
+  return motionIn(world) == "handheld" ? kHandheldSwayDeg : 0.0;
+}
+
+double TrajectoryConfig::bobMIn(const WorldConfig& world) const {
+  if (bob_m) return *bob_m;
+  return motionIn(world) == "handheld" ? kHandheldBobM : 0.0;
 }
 
 void LidarSimConfig::load(const ConfigNode& n) {
@@ -159,8 +181,10 @@ void SimScenario::validate() const {
   check(tr.kind != "waypoints" || (tr.waypoints.size() % 3 == 0 && tr.waypoints.size() >= 9),
         "trajectory.waypoints", "needs x, y, z triples of at least 3 points");
   check(tr.look_at.empty() || tr.look_at.size() == 3, "trajectory.look_at", "expected [x, y, z]");
-  check(tr.sway_deg >= 0.0 && tr.sway_deg <= 20.0, "trajectory.sway_deg", "must be in [0, 20]");
-  check(tr.bob_m >= 0.0 && tr.bob_m <= 0.5, "trajectory.bob_m", "must be in [0, 0.5]");
+  check(tr.motion.empty() || oneOf(tr.motion, {"handheld", "car", "drone"}), "trajectory.motion",
+        "must be handheld, car or drone, got '" + tr.motion + "'");
+  check(!tr.sway_deg || (*tr.sway_deg >= 0.0 && *tr.sway_deg <= 20.0), "trajectory.sway_deg", "must be in [0, 20]");
+  check(!tr.bob_m || (*tr.bob_m >= 0.0 && *tr.bob_m <= 0.5), "trajectory.bob_m", "must be in [0, 0.5]");
   check(std::abs(tr.pitch_deg) <= 45.0, "trajectory.pitch_deg", "must be in [-45, 45]");
 
   check(oneOf(lidar.model, {"avia", "mid360", "spinning32"}), "lidar.model",

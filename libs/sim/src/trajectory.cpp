@@ -103,7 +103,7 @@ void SimTrajectory::sway(double t, Vec3& angles, Vec3& rates, double& z, double&
     dg = dh(x) / tr;
     ddg = ddh(x) / (tr * tr);
   }
-  const double amp = cfg_.sway_deg * kTwoPi / 360.0;
+  const double amp = *cfg_.sway_deg * kTwoPi / 360.0;  // set by withDefaults (path.cpp)
   const Sine(*axes[3])[2] = {&kRoll, &kPitch, &kYaw};
   for (int a = 0; a < 3; ++a) {
     double f, df;
@@ -114,9 +114,10 @@ void SimTrajectory::sway(double t, Vec3& angles, Vec3& rates, double& z, double&
   }
   const double w = kTwoPi * kBobHz;
   const double s = std::sin(w * t), c = std::cos(w * t);
-  z = cfg_.bob_m * g * s;
-  dz = cfg_.bob_m * (dg * s + g * w * c);
-  ddz = cfg_.bob_m * (ddg * s + 2.0 * dg * w * c - g * w * w * s);
+  const double bob = *cfg_.bob_m;
+  z = bob * g * s;
+  dz = bob * (dg * s + g * w * c);
+  ddz = bob * (ddg * s + 2.0 * dg * w * c - g * w * w * s);
 }
 
 BodyState SimTrajectory::state(double t) const {

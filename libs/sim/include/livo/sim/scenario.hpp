@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -54,10 +55,20 @@ struct TrajectoryConfig {
   Eigen::Vector3d frequencies{3.0, 2.0, 5.0};  ///< lissajous: integer frequency ratios x, y, z
   std::vector<double> waypoints;   ///< waypoints: x, y, z triples of a closed path (>= 3 points)
   std::vector<double> look_at;     ///< [x, y, z]: yaw faces this point instead of the travel direction
-  double sway_deg = 2.0;           ///< handheld roll / pitch / yaw sway amplitude
-  double bob_m = 0.02;             ///< vertical step bob amplitude
+  /// What carries the rig: handheld | car | drone; empty: car on a street, handheld elsewhere. It sets
+  /// the defaults of sway_deg and bob_m (motionOf / swayDegOf / bobMOf).
+  std::string motion;
+  std::optional<double> sway_deg;  ///< roll / pitch / yaw sway amplitude; unset: handheld 2 deg, car and drone 0
+  std::optional<double> bob_m;     ///< vertical step bob amplitude; unset: handheld 0.02 m, car and drone 0
   double pitch_deg = 0.0;          ///< constant pitch (positive: nose down)
   void load(const ConfigNode& n);
+  /// The motion kind with its default applied (car on a street, handheld elsewhere).
+  std::string motionIn(const WorldConfig& world) const;
+  /// sway_deg and bob_m with the motion's defaults applied.
+  double swayDegIn(const WorldConfig& world) const;
+  double bobMIn(const WorldConfig& world) const;
+  static constexpr double kHandheldSwayDeg = 2.0;
+  static constexpr double kHandheldBobM = 0.02;
 };
 
 struct LidarSimConfig {

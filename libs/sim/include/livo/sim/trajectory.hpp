@@ -6,7 +6,8 @@
 // uniform time steps into the control points of a periodic uniform cubic B-spline P(tau) (C2).
 // Evaluation: tau(t) stays at 0 during the static period, then a quintic-smoothstep ramp brings
 // dtau/dt from 0 to c <= 1 (C2), then tau advances at rate c. Yaw follows the path tangent (or faces
-// `look_at`), roll / pitch / yaw carry a handheld sway and z a step bob, both faded in with the ramp.
+// `look_at`), roll / pitch / yaw carry a sway and z a step bob (by default only a handheld rig's:
+// TrajectoryConfig::motion), both faded in with the ramp.
 // R_world_imu = Rz(yaw) Ry(pitch) Rx(roll), body x forward, y left, z up.
 #pragma once
 
