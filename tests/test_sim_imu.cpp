@@ -63,6 +63,28 @@ TEST(SimTrajectory, DerivativesMatchFiniteDifferencesAndLimitsHold) {
   }
 }
 
+// A start in motion (static_s = ramp_s = 0) is at cruise from its first instant: the state at t = 0 is
+// the limit of the states after it (the first IMU sample does not read rest).
+TEST(SimTrajectory, AStartInMotionMovesAtItsFirstInstant) {
+  SimScenario sc = makeScenario("street");
+  sc.trajectory.static_s = sc.trajectory.ramp_s = 0.0;
+  sc.trajectory.start_m = 60.0;  // on the first straight (125 m)
+  const SimTrajectory tr(sc.trajectory, sc.world);
+  const BodyState s0 = tr.state(0.0), s1 = tr.state(1e-7);
+  EXPECT_GT(s0.v_world.norm(), 0.9 * sc.trajectory.speed_mps);
+  EXPECT_LT((s0.v_world - s1.v_world).norm(), 1e-5);
+  EXPECT_LT((s0.a_world - s1.a_world).norm(), 1e-4);
+  EXPECT_LT((s0.omega_body - s1.omega_body).norm(), 1e-5);
+  // In a turn too (an oval room loop: always turning).
+  SimScenario room = makeScenario("room");
+  room.trajectory.static_s = room.trajectory.ramp_s = 0.0;
+  const SimTrajectory tr2(room.trajectory, room.world);
+  const BodyState r0 = tr2.state(0.0), r1 = tr2.state(1e-7);
+  EXPECT_GT(r0.omega_body.norm(), 0.05);
+  EXPECT_LT((r0.omega_body - r1.omega_body).norm(), 1e-5);
+  EXPECT_LT((r0.a_world - r1.a_world).norm(), 1e-4);
+}
+
 // ---------------------------------------------------------------- IMU
 
 TEST(SimImu, IntegratesBackToTheTrajectory) {

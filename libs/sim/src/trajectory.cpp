@@ -74,10 +74,11 @@ SimTrajectory::SplineEval SimTrajectory::spline(double tau) const {
   return e;
 }
 
-// tau(t): 0 while static, then dtau/dt = c h(x) over the ramp (x = (t - t_s) / T_r), then c.
+// tau(t): 0 while static, then dtau/dt = c h(x) over the ramp (x = (t - t_s) / T_r), then c. A start in
+// motion (static_s = ramp_s = 0) is at cruise at t = 0 too, not at rest for its first instant.
 void SimTrajectory::timeWarp(double t, double& tau, double& dtau, double& ddtau) const {
   const double ts = cfg_.static_s, tr = cfg_.ramp_s, c = time_scale_;
-  if (t <= ts) {
+  if (t <= ts && !(ts == 0.0 && tr == 0.0)) {
     tau = dtau = ddtau = 0.0;
   } else if (t < ts + tr) {
     const double x = (t - ts) / tr;
@@ -164,7 +165,9 @@ void SimTrajectory::measurePeaks() {
   peak_speed_ = peak_rate_ = 0.0;
   const double end = cfg_.static_s + cfg_.ramp_s + lapTime() + 5.0;
   const double step = std::min(0.01, knot_dt_ / 8.0);
-  for (double t = 0.0; t <= end; t += step) {
+  // From the first step on: the grid is a sampling either way, and t = 0 of a start in motion (the
+  // limit of the states after it) left out keeps the timing the scenarios had before it counted.
+  for (double t = step; t <= end; t += step) {
     const BodyState s = state(t);
     peak_speed_ = std::max(peak_speed_, s.v_world.norm());
     peak_rate_ = std::max(peak_rate_, s.omega_body.norm());
