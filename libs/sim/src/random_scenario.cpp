@@ -3,6 +3,7 @@
 
 #include "livo/common/so3.hpp"
 #include "livo/sim/random.hpp"
+#include "livo/sim/trajectory.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -80,12 +81,15 @@ Eigen::Quaterniond smallTilt(Draw& d, double max_deg) {
 
 }  // namespace
 
+double aliasedHz(double freq_hz, double rate_hz) {
+  return std::abs(freq_hz - rate_hz * std::round(freq_hz / rate_hz));
+}
+
 RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   Draw d(seed);
   std::ostringstream y, sum;
-  y << "# Random rig " << seed << " (livo-sim --random " << seed
-    << "): drawn from the distribution of config/sim/README.md, section \"Random rigs\".\n"
-    << "seed: " << (seed % 1000000007ull) << "\n"
+  std::vector<std::string> classes;
+  y << "seed: " << (seed % 1000000007ull) << "\n"
     << "duration_s: " << num(duration_s) << "\n\n";
 
   // --- World.
@@ -134,12 +138,16 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
       max_accel = d.uniform(1.5, 4.0), sway = d.uniform(0.5, 3.0), bob = 0.0;
     }
   }
-  // Start: at rest long enough for a static window, briefly at rest, or in motion from the first sample.
-  const std::size_t start_kind = d.pick({0.4, 0.3, 0.3});
+  // Start: at rest long enough for a static window; briefly at rest; a fast start (under half a second
+  // at rest, then up to cruise at the vehicle's acceleration limit: the quintic ramp's peak
+  // acceleration is kRampPeak x cruise / ramp_s); or in motion at cruise from the first sample.
+  constexpr double kRampPeak = 1.875;  // max of h'(x) = 30 x^2 (1 - x)^2 (trajectory.cpp)
+  const std::size_t start_kind = d.pick({0.35, 0.15, 0.2, 0.3});
   double static_s = 0.0, ramp_s = 0.0;
   if (start_kind == 0) static_s = d.uniform(1.5, 3.0), ramp_s = d.uniform(0.5, 2.5);
-  else if (start_kind == 1) static_s = d.uniform(0.1, 1.5), ramp_s = d.uniform(0.5, 2.5);
-  y << "trajectory:\n";
+  else if (start_kind == 1) static_s = d.uniform(0.5, 1.5), ramp_s = d.uniform(0.5, 2.5);
+  else if (start_kind == 2) static_s = d.uniform(0.05, 0.5), ramp_s = kRampPeak * speed / max_accel;
+  y << "trajectory:\n  motion: " << motion << "\n";
   if (world == "wall") {
     y << "  kind: lissajous\n  size_m: " << vec({d.uniform(0.5, 1.2), d.uniform(2.0, 5.0), d.uniform(0.5, 1.2)})
       << "\n  frequencies: [3, 2, 5]\n  look_at: " << vec({size.x() + 10.0, 0.0, 1.4}) << "\n";
@@ -151,12 +159,11 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   y << "  speed_mps: " << num(speed) << "\n  max_rot_dps: " << num(max_rot) << "\n  max_accel_mps2: " << num(max_accel)
     << "\n  static_s: " << num(static_s) << "\n  ramp_s: " << num(ramp_s) << "\n  sway_deg: " << num(sway)
     << "\n  bob_m: " << num(bob) << "\n\n";
+  if (start_kind == 3) classes.push_back("moving-start");
+  if (start_kind == 2) classes.push_back("fast-start");
 
-  // --- LiDAR.
-  std::string lidar;
-  if (world == "street") lidar = std::vector<const char*>{"spinning32", "mid360", "avia"}[d.pick({0.5, 0.3, 0.2})];
-  else if (world == "wall") lidar = d.chance(0.6) ? "avia" : "mid360";
-  else lidar = std::vector<const char*>{"avia", "mid360", "spinning32"}[d.pick({0.4, 0.4, 0.2})];
+  // --- LiDAR: the same models in every world (spinning ones on walls and in rooms as on streets).
+  const std::string lidar = std::vector<const char*>{"avia", "mid360", "spinning32"}[d.pick({1.0, 1.0, 1.0})];
   const double model_pps = lidar == "avia" ? 240000.0 : lidar == "mid360" ? 200000.0 : 327680.0;
   const double density = d.logUniform(0.25, 1.0);
   const double lidar_rate = std::vector<double>{10.0, 20.0, 5.0}[d.pick({0.8, 0.1, 0.1})];
@@ -169,10 +176,13 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
     << "\n\n";
   sum << ", " << lidar << " " << g(std::round(model_pps * density / 1000.0)) << "k pts/s @" << g(lidar_rate)
       << " Hz blind " << g(std::round(blind * 100) / 100) << " m";
+  if (lidar == "spinning32" && (world == "wall" || world == "room")) classes.push_back("spinning-" + world);
 
-  // --- IMU: noise from 0.5x to 30x the shipped densities (tactical to consumer grade).
+  // --- IMU: noise from 0.5x to 30x the shipped densities (tactical to consumer grade), bias walks
+  // 0.5x to 10x the shipped ones (drawn apart from the noise and from each other).
   const double imu_rate = std::vector<double>{100.0, 200.0, 250.0, 400.0}[d.pick({0.2, 0.4, 0.15, 0.25})];
   const double grade = d.logUniform(0.5, 30.0);
+  const double gyro_walk = d.logUniform(0.5, 10.0), accel_walk = d.logUniform(0.5, 10.0);
   const double gb = d.logUniform(0.0005, 0.01), ab = d.logUniform(0.005, 0.1);
   auto dir = [&d]() {
     Eigen::Vector3d v(d.gaussian(), d.gaussian(), d.gaussian());
@@ -180,27 +190,42 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   };
   const Eigen::Vector3d bg = gb * dir(), ba = ab * dir();
   y << "imu:\n  rate_hz: " << num(imu_rate) << "\n  gyro_noise: " << num(1.7e-4 * grade)
-    << "\n  accel_noise: " << num(2.0e-3 * grade) << "\n  gyro_bias_walk: " << num(1.9e-5 * std::sqrt(grade))
-    << "\n  accel_bias_walk: " << num(3.0e-3 * std::sqrt(grade)) << "\n  gyro_bias_init: " << vec({bg.x(), bg.y(), bg.z()})
+    << "\n  accel_noise: " << num(2.0e-3 * grade) << "\n  gyro_bias_walk: " << num(1.9e-5 * gyro_walk)
+    << "\n  accel_bias_walk: " << num(3.0e-3 * accel_walk) << "\n  gyro_bias_init: " << vec({bg.x(), bg.y(), bg.z()})
     << "\n  accel_bias_init: " << vec({ba.x(), ba.y(), ba.z()}) << "\n";
-  sum << ", IMU " << g(imu_rate) << " Hz x" << g(std::round(grade * 10) / 10) << " noise";
-  if (d.chance(0.25)) {  // rotor / engine vibration
-    const double va = d.uniform(0.05, 0.5), vg = d.uniform(0.005, 0.05), vf = d.uniform(40.0, 200.0);
+  sum << ", IMU " << g(imu_rate) << " Hz x" << g(std::round(grade * 10) / 10) << " noise, walk x"
+      << g(std::round(gyro_walk * 10) / 10) << " / x" << g(std::round(accel_walk * 10) / 10);
+  if (grade > 10.0) classes.push_back("noisy-imu");
+  // Rotor / engine vibration, sampled by the IMU at its rate without an anti-aliasing filter: above
+  // half the rate it shows at the aliased frequency.
+  if (d.chance(0.3)) {
+    const double va = d.logUniform(0.05, 3.0), vg = d.logUniform(0.005, 0.06), vf = d.uniform(20.0, 250.0);
     y << "  vibration:\n    accel_mps2: " << num(va) << "\n    gyro_rad_s: " << num(vg) << "\n    freq_hz: " << num(vf)
       << "\n";
-    sum << " +vibration";
+    sum << ", vibration " << g(std::round(va * 100) / 100) << " m/s^2 " << g(std::round(vg * 1000) / 1000) << " rad/s at "
+        << g(std::round(vf)) << " Hz";
+    if (vf > 0.5 * imu_rate) {
+      sum << " (aliased to " << g(std::round(aliasedHz(vf, imu_rate) * 10) / 10) << " Hz by the " << g(imu_rate)
+          << " Hz IMU)";
+      classes.push_back("vibration-aliased");
+    } else {
+      sum << " (under the " << g(imu_rate) << " Hz IMU's Nyquist " << g(0.5 * imu_rate) << " Hz)";
+      classes.push_back("vibration");
+    }
   }
   y << "\n";
 
-  // --- Camera: at most 8 Mpixel/s rendered (the simulator ray-casts every pixel).
+  // --- Camera: 0.5 to 3 times the LiDAR's rate; at most 8 Mpixel/s rendered (the simulator ray-casts
+  // every pixel): a faster camera gets fewer pixels.
   const bool fisheye = d.chance(0.35);
   static const int kWidths[] = {320, 640, 752, 960, 1280};
-  const int width = kWidths[d.pick({0.2, 0.35, 0.15, 0.15, 0.15})];
+  std::size_t width_i = d.pick({0.2, 0.35, 0.15, 0.15, 0.15});
   const double aspect = std::vector<double>{0.8, 0.75, 0.5625}[d.pick({0.4, 0.4, 0.2})];
-  const int height = static_cast<int>(std::lround(width * aspect / 2.0)) * 2;
-  std::vector<double> rates{5.0, 10.0, 15.0, 20.0, 30.0};
-  double cam_rate = rates[d.pick({0.15, 0.35, 0.15, 0.2, 0.15})];
-  while (cam_rate > 5.0 && width * height * cam_rate > 8e6) cam_rate = cam_rate > 10.0 ? cam_rate - 5.0 : 5.0;
+  const double cam_factor = std::vector<double>{0.5, 1.0, 1.5, 2.0, 3.0}[d.pick({0.15, 0.35, 0.15, 0.2, 0.15})];
+  const double cam_rate = cam_factor * lidar_rate;
+  auto heightOf = [aspect](int w) { return static_cast<int>(std::lround(w * aspect / 2.0)) * 2; };
+  while (width_i > 0 && kWidths[width_i] * heightOf(kWidths[width_i]) * cam_rate > 8e6) --width_i;
+  const int width = kWidths[width_i], height = heightOf(width);
   const double fov_deg = fisheye ? d.uniform(120.0, 190.0) : d.uniform(60.0, 110.0);
   const double half = 0.5 * fov_deg * kDeg;
   const double f = fisheye ? (0.5 * width) / half : (0.5 * width) / std::tan(half);
@@ -217,7 +242,8 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   y << "\n  rate_hz: " << num(cam_rate) << "\n  phase_s: " << num(d.uniform(0.0, 1.0 / cam_rate))
     << "\n  exposure_jitter: " << num(d.uniform(0.0, 0.3)) << "\n  pixel_noise: " << num(d.uniform(1.0, 4.0));
   sum << ", " << (fisheye ? "fisheye " : "pinhole ") << width << "x" << height << " " << g(std::round(fov_deg))
-      << " deg @" << g(cam_rate) << " Hz";
+      << " deg @" << g(cam_rate) << " Hz (" << g(cam_factor) << "x the LiDAR)";
+  if (cam_factor >= 2.0) classes.push_back("fast-camera");
   if (d.chance(0.5)) y << "\n  exposure_time_s: " << num(d.uniform(0.001, std::min(0.02, 0.5 / cam_rate)));
   if (d.chance(0.5)) y << "\n  vignetting: " << num(d.uniform(0.0, 0.5));
   if (d.chance(0.3)) {
@@ -237,9 +263,32 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
   y << "extrinsics:\n  T_imu_lidar: " << poseText(t_l, q_l) << "\n  T_imu_camera: " << poseText(t_c, q_c) << "\n";
 
   sum << ", " << motion << " " << g(std::round(speed * 10) / 10) << " m/s, ";
-  if (static_s > 0) sum << "rest " << g(std::round(static_s * 10) / 10) << " s";
-  else sum << "moving start";
-  return {y.str(), sum.str()};
+  if (start_kind == 0) {
+    sum << "rest " << g(std::round(static_s * 10) / 10) << " s then a " << g(std::round(ramp_s * 10) / 10) << " s ramp";
+  } else if (start_kind == 1) {
+    sum << "short rest " << g(std::round(static_s * 10) / 10) << " s then a " << g(std::round(ramp_s * 10) / 10)
+        << " s ramp";
+  } else if (start_kind == 2) {
+    sum << "short rest " << g(std::round(static_s * 100) / 100) << " s then " << g(std::round(max_accel * 10) / 10)
+        << " m/s^2 acceleration";
+  } else {
+    // The speed at the first sample: the cruise limit, or less where the start lies in a turn.
+    double v0 = speed;
+    try {
+      const SimScenario sc = parseScenario(y.str());
+      v0 = SimTrajectory(sc.trajectory, sc.world).state(0.0).v_world.norm();
+    } catch (const ConfigError&) {
+    }
+    sum << "moving at " << g(std::round(v0 * 10) / 10) << " m/s from the first sample";
+  }
+  std::string class_list;
+  for (const auto& c : classes) class_list += (class_list.empty() ? "" : ", ") + c;
+  if (!classes.empty()) sum << " [" << class_list << "]";
+  std::ostringstream head;
+  head << "# Random rig " << seed << " (livo-sim --random " << seed
+       << "): drawn from the distribution of config/sim/README.md, section \"Random rigs\".\n"
+       << "# classes: " << (classes.empty() ? "-" : class_list) << "\n";
+  return {head.str() + y.str(), sum.str(), classes};
 }
 
 }  // namespace livo::sim
