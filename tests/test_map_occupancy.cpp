@@ -108,3 +108,15 @@ TEST(OccupancySearch, EmptyInputsReturnTheCentreAndBadArgumentsThrow) {
   EXPECT_THROW(OccupancyPyramid(0.1, 0), std::invalid_argument);
   EXPECT_THROW(OccupancyPyramid(0.1, 13), std::invalid_argument);
 }
+
+TEST(OccupancySearch, ScoreCountsHitsAndStopsWhenABarCannotBeReached) {
+  OccupancyPyramid map(0.2, 3);
+  map.insert(Vec3::Zero());  // marks [-0.2, 0.4) per axis at the finest level
+  const std::vector<Vec3> pts{Vec3(0.1, 0, 0), Vec3(0.3, 0, 0), Vec3(5, 0, 0), Vec3(6, 0, 0), Vec3(0, 0.1, 0)};
+  EXPECT_EQ(map.levels(), 3);
+  EXPECT_EQ(map.score(pts, Vec3::Zero(), 0), 3);
+  EXPECT_EQ(map.score(pts, Vec3(10, 0, 0), 0), 0);
+  EXPECT_EQ(map.score(pts, Vec3::Zero(), 0, 3), 3);  // reachable: counted to the end
+  EXPECT_LT(map.score(pts, Vec3::Zero(), 0, 4), 4);  // unreachable: less than the bar
+  EXPECT_EQ(map.score(pts, Vec3::Zero(), 2), 3);     // coarser cells of 0.8 m: the far points still miss
+}

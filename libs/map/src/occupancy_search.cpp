@@ -31,11 +31,16 @@ void OccupancyPyramid::clear() {
   for (auto& l : levels_) l = {};
 }
 
-int OccupancyPyramid::score(const std::vector<Vec3>& pts, const Vec3& t, int level) const {
+int OccupancyPyramid::score(const std::vector<Vec3>& pts, const Vec3& t, int level, int at_least) const {
   const auto& cells = levels_[static_cast<std::size_t>(level)];
   const double s = cellSize(level);
   int n = 0;
-  for (const auto& p : pts) n += cells.count(VoxelKey::fromPoint(p + t, s)) ? 1 : 0;
+  int left = static_cast<int>(pts.size());
+  for (const auto& p : pts) {
+    n += cells.count(VoxelKey::fromPoint(p + t, s)) ? 1 : 0;
+    --left;
+    if (n + left < at_least) break;
+  }
   return n;
 }
 

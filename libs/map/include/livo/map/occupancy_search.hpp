@@ -40,9 +40,14 @@ class OccupancyPyramid {
   /// cells. Points are used as given (the caller subsamples: the cost is points x candidates).
   Result search(const std::vector<Vec3>& pts, const Vec3& center, double radius_m) const;
 
- private:
-  int score(const std::vector<Vec3>& pts, const Vec3& t, int level) const;
+  /// How many of `pts` + t fall in occupied cells of `level` (0: finest): the score of one candidate,
+  /// for searches over more than translation (scan_registration.hpp adds rotation). With `at_least`
+  /// > 0 the count stops as soon as it cannot reach at_least any more and returns what it has (less
+  /// than at_least): a candidate that cannot beat the ones kept costs less.
+  int score(const std::vector<Vec3>& pts, const Vec3& t, int level, int at_least = 0) const;
+  int levels() const { return static_cast<int>(levels_.size()); }
 
+ private:
   double finest_m_;
   std::vector<std::unordered_set<VoxelKey, VoxelKeyHash>> levels_;
 };
