@@ -1,0 +1,971 @@
+#include "livo/estimation/scan_registration.hpp"
+
+#include "livo/map/point_cov.hpp"
+#include "livo/map/voxel_key.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_set>
+
+namespace livo {
+
+ScanRegistrationConfig ScanRegistrationConfig::from(const LioConfig& lio, const VoxelMapConfig& map, int min_matches) {
+  ScanRegistrationConfig c;
+  c.range_noise_m = lio.range_noise_m;
+  c.beam_noise_deg = lio.beam_noise_deg;
+  c.residual_floor_var = lio.residual_floor_var;
+  c.converge_rot_deg = lio.converge_rot_deg;
+  c.converge_pos_m = lio.converge_pos_m;
+  c.voxel_size_m = map.voxel_size_m;
+  c.min_eigen_value = map.min_eigen_value;
+  c.sigma_num = map.sigma_num;
+  c.min_matches = min_matches;
+  return c;
+}
+
+double ScanRegistrationConfig::pointSigma() const {
+  return std::sqrt(range_noise_m * range_noise_m + min_eigen_value);
+}
+
+double ScanRegistrationConfig::maxRms() const { return std::sqrt(3.0) * pointSigma(); }
+
+const char* toString(RegistrationFailure f) {
+  switch (f) {
+    case RegistrationFailure::None: return "registered";
+    case RegistrationFailure::TooFewPoints: return "too few points";
+    case RegistrationFailure::EmptyMap: return "no map planes near the initial pose";
+    case RegistrationFailure::TooFewMatches: return "too few matched points";
+    case RegistrationFailure::HighResidual: return "high residual";
+    case RegistrationFailure::NotConverged: return "not converged";
+  }
+  return "?";
+}
+
+// ------------------------------------------------------------------------------------------ SearchMap
+
+std::vector<NormalPatch> planarPatches(const std::vector<Vec3>& points, double cell, double max_eigen_value) {
+  struct Acc {
+    Vec3 origin = Vec3::Zero();  // the first point: sums relative to it stay exact far from the origin
+    Vec3 s = Vec3::Zero();
+    Mat3 ss = Mat3::Zero();
+    int n = 0;
+  };
+  std::unordered_map<VoxelKey, Acc, VoxelKeyHash> cells;
+  for (const Vec3& p : points) {
+    if (!keyablePoint(p, cell)) continue;
+    Acc& a = cells[VoxelKey::fromPoint(p, cell)];
+    if (a.n == 0) a.origin = p;
+    const Vec3 d = p - a.origin;
+    a.s += d;
+    a.ss.noalias() += d * d.transpose();
+    ++a.n;
+  }
+  std::vector<NormalPatch> out;
+  const double min_spread = std::pow(cell / 8.0, 2);
+  for (const auto& kv : cells) {
+    const Acc& a = kv.second;
+    if (a.n < 6) continue;
+    const Vec3 mean = a.s / a.n;
+    const Mat3 C = a.ss / a.n - mean * mean.transpose();
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(C);
+    const Vec3 l = es.eigenvalues();
+    if (!(l(0) < max_eigen_value) || !(l(1) > 4.0 * std::max(l(0), 0.0)) || !(l(1) > min_spread)) continue;
+    out.push_back({es.eigenvectors().col(0).normalized(), a.origin + mean, double(a.n)});
+  }
+  return out;
+}
+
+namespace {
+constexpr double kNormalKeyCell = M_PI / 180.0;  // 1 deg
+}  // namespace
+
+SearchMap::SearchMap(const ScanRegistrationConfig& cfg)
+    : pyramid_(cfg.searchCell(), cfg.search_levels),
+      voxel_m_(cfg.voxel_size_m),
+      patch_eigen_(cfg.min_eigen_value + cfg.range_noise_m * cfg.range_noise_m),
+      tile_m_(16.0 * cfg.voxel_size_m) {}
+
+void SearchMap::clear() {
+  pyramid_.clear();
+  seen_.clear();
+  normals_.clear();
+}
+
+void SearchMap::addNormal(const Vec3& position, const Vec3& normal, double weight) {
+  if (!position.allFinite() || !normal.allFinite() || !(weight > 0) || !keyablePoint(position, tile_m_)) return;
+  Vec3 n = normal.normalized();
+  if (n.z() < 0 || (n.z() == 0 && (n.y() < 0 || (n.y() == 0 && n.x() < 0)))) n = -n;
+  normals_[VoxelKey::fromPoint(position, tile_m_)][VoxelKey::fromPoint(n, kNormalKeyCell)] += weight;
+}
+
+void SearchMap::forEachNormal(const Vec3& center, double radius_m,
+                              const std::function<void(const Vec3&, double)>& f) const {
+  const double reach = radius_m + 0.87 * tile_m_;
+  for (const auto& tile : normals_) {
+    if ((tile.first.center(tile_m_) - center).norm() > reach) continue;
+    for (const auto& kv : tile.second) f(kv.first.center(kNormalKeyCell).normalized(), kv.second);
+  }
+}
+
+void SearchMap::addPoints(const std::vector<Vec3>& world) {
+  // Points in one finest cell mark the same cells at every level (the cells nest): one per cell, ever.
+  const double cell = pyramid_.cellSize(0);
+  for (const Vec3& p : world)
+    if (keyablePoint(p, cell) && seen_.insert(VoxelKey::fromPoint(p, cell)).second) pyramid_.insert(p);
+  for (const NormalPatch& np : planarPatches(world, voxel_m_, patch_eigen_)) addNormal(np.center, np.normal, np.weight);
+}
+
+void SearchMap::addPlanes(const VoxelMap& map, const Vec3& center, double radius_m) {
+  const double h = pyramid_.cellSize(0);
+  const double s = map.rootVoxelSize();
+  const double gate = map.sigmaNum();
+  std::vector<Vec3> samples;
+  map.forEachPlane([&](const VoxelKey&, const Plane& pl) {
+    if (!pl.is_plane) return;
+    if (radius_m > 0 && (pl.center - center).norm() > radius_m) return;
+    addNormal(pl.center, pl.normal, double(pl.num_points));
+    // The plane's points lie in its octree cell (edge s / 2^layer) and within the association's
+    // in-plane gate (sigma_num x radius) of its centre: sample the plane there.
+    const double e = s / std::ldexp(1.0, pl.layer);
+    const Vec3 lo = VoxelKey::fromPoint(pl.center, e).center(e) - Vec3::Constant(0.5 * e);
+    const Vec3 hi = lo + Vec3::Constant(e);
+    const Vec3 n = pl.normal.normalized();
+    const Vec3 a = (std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY()).cross(n).normalized();
+    const Vec3 b = n.cross(a);
+    const double r = std::min(0.87 * e, gate * pl.radius);
+    const int m = static_cast<int>(std::ceil(r / h));
+    for (int i = -m; i <= m; ++i)
+      for (int j = -m; j <= m; ++j) {
+        const Vec3 q = pl.center + (i * h) * a + (j * h) * b;
+        if ((q - pl.center).norm() > r) continue;
+        if ((q.array() < lo.array() - 1e-9).any() || (q.array() > hi.array() + 1e-9).any()) continue;
+        samples.push_back(q);
+      }
+  });
+  for (const Vec3& p : samples)
+    if (keyablePoint(p, h) && seen_.insert(VoxelKey::fromPoint(p, h)).second) pyramid_.insert(p);
+}
+
+// ----------------------------------------------------------------------------------- ScanRegistration
+
+namespace {
+
+using Vec6d = Eigen::Matrix<double, 6, 1>;
+
+Mat3 yawRotation(double yaw) { return Eigen::AngleAxisd(yaw, Vec3::UnitZ()).toRotationMatrix(); }
+
+/// Indices of `pts` thinned to one per cube of `cell` (the first in scan order), then strided down to
+/// at most `max_n`.
+std::vector<std::size_t> spread(const std::vector<BodyPoint>& pts, double cell, int max_n) {
+  std::unordered_set<VoxelKey, VoxelKeyHash> seen;
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (keyablePoint(pts[i].p_imu, cell) && seen.insert(VoxelKey::fromPoint(pts[i].p_imu, cell)).second)
+      idx.push_back(i);
+  if (max_n > 0 && idx.size() > static_cast<std::size_t>(max_n)) {
+    std::vector<std::size_t> out;
+    out.reserve(static_cast<std::size_t>(max_n));
+    const double stride = double(idx.size()) / max_n;
+    for (int k = 0; k < max_n; ++k) out.push_back(idx[static_cast<std::size_t>(k * stride)]);
+    idx.swap(out);
+  }
+  return idx;
+}
+
+/// A search candidate: yaw offset and translation offset from the initial pose.
+struct Candidate {
+  double yaw = 0.0;
+  Vec3 t = Vec3::Zero();
+  int score = -1;
+  double tie = 0.0;  ///< distance from the initial pose in steps (ties go to the nearest)
+};
+
+bool better(const Candidate& a, const Candidate& b) {
+  return a.score > b.score || (a.score == b.score && a.tie < b.tie);
+}
+
+/// The correlative search (header, step 1). Returns the candidates of the finest level, best first.
+/// Candidates that cannot reach `floor_score` are not counted to the end (a coarser level's score is
+/// at least the finer one's: a rotation whose best cannot reach it is given up early).
+std::vector<Candidate> correlativeSearch(const OccupancyPyramid& pyr, const std::vector<Vec3>& pts_body,
+                                         const Pose& T0, const SearchBounds& b, int beam, double& yaw_step0,
+                                         int floor_score = 0) {
+  const Mat3 R0 = T0.linear();
+  const Vec3 p0 = T0.translation();
+  // Reference horizontal range: the 75th percentile of the scored points' distance from the z axis
+  // (after R0); a yaw step of cell / range moves such a point by one cell.
+  std::vector<double> ranges;
+  for (const Vec3& p : pts_body) ranges.push_back((R0 * p).head<2>().norm());
+  std::nth_element(ranges.begin(), ranges.begin() + ranges.size() * 3 / 4, ranges.end());
+  const double r_ref = std::max(1.0, ranges[ranges.size() * 3 / 4]);
+  auto yawStep = [&](int level) { return pyr.cellSize(level) / r_ref; };
+
+  const double R = std::max(0.0, b.translation_m);
+  const double Y = std::max(0.0, b.yaw_rad);
+  const int top = pyr.levels() - 1;
+  int level = 0;
+  // Translation alone: every translation of the finest level whose cell is at least a third of the
+  // radius (at most 7 a side). With yaw: the finest level whose cell is at least half the radius and
+  // whose yaw step leaves at most 8 steps either side.
+  if (Y > 0) {
+    while (level < top && (pyr.cellSize(level) * 2.0 < R || Y / yawStep(level) > 8.0)) ++level;
+  } else {
+    while (level < top && pyr.cellSize(level) * 3.0 < R) ++level;
+  }
+  yaw_step0 = yawStep(0);
+
+  // The scores of the best `n` candidates so far: a candidate that cannot reach the n-th is not
+  // counted to the end (OccupancyPyramid::score's at_least).
+  struct Bar {
+    std::size_t n;
+    std::vector<int> top;  // ascending, at most n
+    int atLeast() const { return top.size() < n ? 0 : top.front(); }
+    void add(int s) {
+      if (top.size() < n) {
+        top.insert(std::upper_bound(top.begin(), top.end(), s), s);
+      } else if (s > top.front()) {
+        top.erase(top.begin());
+        top.insert(std::upper_bound(top.begin(), top.end(), s), s);
+      }
+    }
+  };
+  auto score = [&](Candidate& c, int lvl, std::vector<Vec3>& rotated, int at_least) {
+    const Mat3 Rc = yawRotation(c.yaw) * R0;
+    rotated.resize(pts_body.size());
+    for (std::size_t i = 0; i < pts_body.size(); ++i) rotated[i] = Rc * pts_body[i];
+    c.score = pyr.score(rotated, p0 + c.t, lvl, at_least);
+    c.tie = (c.t / pyr.cellSize(0)).squaredNorm() + std::pow(c.yaw / yaw_step0, 2);
+  };
+  auto inside = [&](const Candidate& c) {
+    return c.t.cwiseAbs().maxCoeff() <= R + 1e-9 && std::abs(c.yaw) <= Y + 1e-12;
+  };
+
+  // Top level: every translation of the level's grid x every yaw of its step.
+  std::vector<Candidate> cands;
+  {
+    Bar bar{static_cast<std::size_t>(beam), {}};
+    const double cell = pyr.cellSize(level);
+    const int half = R > 0 ? static_cast<int>(std::ceil(R / cell)) : 0;
+    const double ystep = yawStep(level);
+    const int yhalf = Y > 0 ? static_cast<int>(std::ceil(Y / ystep)) : 0;
+    std::vector<Vec3> rotated(pts_body.size());
+    for (int y = -yhalf; y <= yhalf; ++y) {
+      const double yaw = std::clamp(y * ystep, -Y, Y);
+      const Mat3 Rc = yawRotation(yaw) * R0;
+      for (std::size_t i = 0; i < pts_body.size(); ++i) rotated[i] = Rc * pts_body[i];
+      for (int i = -half; i <= half; ++i)
+        for (int j = -half; j <= half; ++j)
+          for (int k = -half; k <= half; ++k) {
+            Candidate c;
+            c.yaw = yaw;
+            c.t = Vec3(i, j, k) * cell;
+            c.t = c.t.cwiseMax(Vec3::Constant(-R)).cwiseMin(Vec3::Constant(R));
+            c.score = pyr.score(rotated, p0 + c.t, level, std::max(floor_score, bar.atLeast()));
+            c.tie = (c.t / pyr.cellSize(0)).squaredNorm() + std::pow(c.yaw / yaw_step0, 2);
+            bar.add(c.score);
+            cands.push_back(c);
+          }
+    }
+  }
+  auto keepBest = [&](std::vector<Candidate>& v, std::size_t n) {
+    std::sort(v.begin(), v.end(), better);
+    // Drop duplicates (the same candidate reached from two beam members).
+    std::vector<Candidate> out;
+    for (const Candidate& c : v) {
+      bool dup = false;
+      for (const Candidate& o : out)
+        if ((o.t - c.t).cwiseAbs().maxCoeff() < 1e-9 && std::abs(o.yaw - c.yaw) < 1e-12) {
+          dup = true;
+          break;
+        }
+      if (!dup) out.push_back(c);
+      if (out.size() >= n) break;
+    }
+    v.swap(out);
+  };
+  keepBest(cands, static_cast<std::size_t>(beam));
+
+  // Finer levels: each kept candidate's 3 yaws x 27 translations at the level's steps.
+  std::vector<Vec3> rotated;
+  while (level > 0) {
+    --level;
+    const double cell = pyr.cellSize(level);
+    const double ystep = Y > 0 ? yawStep(level) : 0.0;
+    std::vector<Candidate> next;
+    Bar bar{static_cast<std::size_t>(beam), {}};
+    for (const Candidate& c : cands)
+      for (int y = -1; y <= 1; ++y) {
+        if (Y <= 0 && y != 0) continue;
+        for (int i = -1; i <= 1; ++i)
+          for (int j = -1; j <= 1; ++j)
+            for (int k = -1; k <= 1; ++k) {
+              if (R <= 0 && (i || j || k)) continue;
+              Candidate n;
+              n.yaw = c.yaw + y * ystep;
+              n.t = c.t + Vec3(i, j, k) * cell;
+              if (!inside(n)) continue;
+              // At the finest level every candidate within kAmbiguousScore of the best so far is
+              // counted to the end (hypotheses near the best); above it the beam's last.
+              const int at_least = std::max(
+                  floor_score, level == 0 ? static_cast<int>(std::floor(ScanRegistration::kAmbiguousScore *
+                                                                        (bar.top.empty() ? 0 : bar.top.back())))
+                                          : bar.atLeast());
+              score(n, level, rotated, at_least);
+              bar.add(n.score);
+              next.push_back(n);
+            }
+      }
+    // Keep the whole scored set of the finest level (distinct() picks the hypotheses from it).
+    keepBest(next, level == 0 ? next.size() : static_cast<std::size_t>(beam));
+    cands.swap(next);
+  }
+  return cands;
+}
+
+/// The distinct candidates to refine, best first (at most n; the next must be away from the kept).
+std::vector<Candidate> distinct(const std::vector<Candidate>& cands, int n, double cell0, double yaw_step0) {
+  std::vector<Candidate> out;
+  for (const Candidate& c : cands) {
+    bool near = false;
+    for (const Candidate& o : out)
+      if ((c.t - o.t).cwiseAbs().maxCoeff() <= 2.0 * cell0 + 1e-9 && std::abs(c.yaw - o.yaw) <= 2.0 * yaw_step0 + 1e-12)
+        near = true;
+    if (!near) out.push_back(c);
+    if (static_cast<int>(out.size()) >= n) break;
+  }
+  return out;
+}
+
+/// Density of unit normals (both signs) on a dense grid over [-1, 1]^3 with cells of `cell` (about
+/// the angle in rad), blurred by a 3 x 3 x 3 box: a direction scores the weight of the normals within
+/// about a cell of it.
+class NormalDensity {
+ public:
+  explicit NormalDensity(double cell)
+      : h_(cell), n_(static_cast<int>(std::ceil(2.0 / cell)) + 1), v_(static_cast<std::size_t>(n_) * n_ * n_, 0.0f) {}
+  double cell() const { return h_; }
+  void add(const Vec3& n, double w) {
+    v_[index(n)] += static_cast<float>(w);
+    v_[index(-n)] += static_cast<float>(w);
+  }
+  void blur() {
+    std::vector<float> tmp(v_.size());
+    const std::size_t stride[3] = {1, static_cast<std::size_t>(n_), static_cast<std::size_t>(n_) * n_};
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int z = 0; z < n_; ++z)
+        for (int y = 0; y < n_; ++y)
+          for (int x = 0; x < n_; ++x) {
+            const int c[3] = {x, y, z};
+            const std::size_t i = x + stride[1] * y + stride[2] * z;
+            float sum = v_[i];
+            if (c[axis] > 0) sum += v_[i - stride[axis]];
+            if (c[axis] + 1 < n_) sum += v_[i + stride[axis]];
+            tmp[i] = sum;
+          }
+      v_.swap(tmp);
+    }
+  }
+  double at(const Vec3& n) const { return v_[index(n)]; }
+
+ private:
+  int coord(double c) const { return std::clamp(static_cast<int>((c + 1.0) / h_), 0, n_ - 1); }
+  std::size_t index(const Vec3& n) const {
+    return static_cast<std::size_t>(coord(n.x())) + static_cast<std::size_t>(n_) * coord(n.y()) +
+           static_cast<std::size_t>(n_) * n_ * coord(n.z());
+  }
+  double h_;
+  int n_;
+  std::vector<float> v_;
+};
+
+/// A rotation candidate: R = Rz(yaw) Exp([a, b, 0]) R0 (yaw about world z, tilt about world x and y).
+struct RotCandidate {
+  double yaw = 0.0, a = 0.0, b = 0.0;
+  double score = -1.0;
+};
+
+Mat3 rotationOf(const RotCandidate& c, const Mat3& R0) { return yawRotation(c.yaw) * expSO3(Vec3(c.a, c.b, 0.0)) * R0; }
+
+/// Histogram of the normals' elevation (angle to the horizontal plane, 0 to 90 deg, 1 deg bins,
+/// blurred over +-2 bins): what a rotation about the vertical leaves unchanged.
+class ElevationHistogram {
+ public:
+  ElevationHistogram() : v_(kBins, 0.0) {}
+  void add(const Vec3& n, double w) { v_[bin(n)] += w; }
+  void blur() {
+    std::vector<double> out(kBins, 0.0);
+    for (int i = 0; i < kBins; ++i)
+      for (int j = std::max(0, i - 2); j <= std::min(kBins - 1, i + 2); ++j) out[i] += v_[j];
+    v_.swap(out);
+  }
+  double at(const Vec3& n) const { return v_[bin(n)]; }
+
+ private:
+  static constexpr int kBins = 91;
+  static int bin(const Vec3& n) {
+    const double e = std::asin(std::min(1.0, std::abs(n.z()) / std::max(n.norm(), 1e-12))) * 180.0 / M_PI;
+    return std::clamp(static_cast<int>(std::lround(e)), 0, kBins - 1);
+  }
+  std::vector<double> v_;
+};
+
+/// Rotation search over the normals (header, step 1). The tilt first, from the elevations alone (a
+/// yaw does not change them): every (a, b) on a 2 deg grid within +-Tl, then +-1 deg around the best.
+/// Then the yaw, every 1 deg within +-Y, at the best of the tilts within +-3 deg of that one, scored
+/// against the map's normal density at 4 deg cells; its n_peaks best local maxima (at least 3 deg
+/// apart) climb on the 2 deg density.
+std::vector<RotCandidate> rotationSearch(const NormalDensity& fine, const NormalDensity& coarse,
+                                         const ElevationHistogram& elev, const std::vector<NormalPatch>& patches,
+                                         const Mat3& R0, double Y, double Tl, int n_peaks) {
+  const double deg = M_PI / 180.0;
+  RotCandidate tilt;
+  if (Tl > 0) {
+    auto tiltScore = [&](double a, double b) {
+      const Mat3 R = expSO3(Vec3(a, b, 0.0)) * R0;
+      double s = 0.0;
+      for (const NormalPatch& p : patches) s += p.weight * elev.at(R * p.normal);
+      return s;
+    };
+    auto consider = [&](double a, double b) {
+      if (std::abs(a) > Tl + 1e-12 || std::abs(b) > Tl + 1e-12) return;
+      const double s = tiltScore(a, b);
+      if (s > tilt.score || (s == tilt.score && a * a + b * b < tilt.a * tilt.a + tilt.b * tilt.b)) {
+        tilt.score = s;
+        tilt.a = a;
+        tilt.b = b;
+      }
+    };
+    const int n = static_cast<int>(std::floor(Tl / (2 * deg)));
+    for (int i = -n; i <= n; ++i)
+      for (int j = -n; j <= n; ++j) consider(i * 2 * deg, j * 2 * deg);
+    const RotCandidate coarse = tilt;
+    for (int i = -1; i <= 1; ++i)
+      for (int j = -1; j <= 1; ++j) consider(coarse.a + i * deg, coarse.b + j * deg);
+  }
+  const int ny = static_cast<int>(std::floor(Y / deg));
+  std::vector<RotCandidate> profile;
+  // The elevations settle the tilt within a few degrees only: each yaw takes the best of the tilts
+  // within +-3 deg of theirs.
+  for (int i = -ny; i <= ny; ++i) {
+    RotCandidate best;
+    for (int j = -1; j <= 1; ++j)
+      for (int k = -1; k <= 1; ++k) {
+        if (Tl <= 0 && (j || k)) continue;
+        RotCandidate c = tilt;
+        c.yaw = i * deg;
+        c.a = std::clamp(tilt.a + j * 3 * deg, -Tl, Tl);
+        c.b = std::clamp(tilt.b + k * 3 * deg, -Tl, Tl);
+        const Mat3 R = rotationOf(c, R0);
+        double s = 0.0;
+        for (const NormalPatch& p : patches) s += p.weight * coarse.at(R * p.normal);
+        c.score = s;
+        if (c.score > best.score) best = c;
+      }
+    profile.push_back(best);
+  }
+  // Local maxima of the yaw profile (ties to the smaller yaw offset), at least 4 deg apart.
+  std::vector<RotCandidate> peaks;
+  for (std::size_t i = 0; i < profile.size(); ++i) {
+    bool peak = true;
+    for (std::size_t j = (i >= 2 ? i - 2 : 0); j <= std::min(profile.size() - 1, i + 2); ++j)
+      if (j != i && (profile[j].score > profile[i].score ||
+                     (profile[j].score == profile[i].score && std::abs(profile[j].yaw) < std::abs(profile[i].yaw))))
+        peak = false;
+    if (peak) peaks.push_back(profile[i]);
+  }
+  auto better = [](const RotCandidate& x, const RotCandidate& y) {
+    return x.score > y.score || (x.score == y.score && std::abs(x.yaw) < std::abs(y.yaw));
+  };
+  std::sort(peaks.begin(), peaks.end(), better);
+  if (peaks.size() > static_cast<std::size_t>(n_peaks)) peaks.resize(static_cast<std::size_t>(n_peaks));
+  // Each peak climbs jointly in (yaw, a, b) on the fine density, 1 deg steps, within the bounds (the
+  // tilt from the elevations alone may be a few degrees off: the wall normals settle it).
+  auto fineScore = [&](RotCandidate& c) {
+    const Mat3 R = rotationOf(c, R0);
+    double s = 0.0;
+    for (const NormalPatch& p : patches) s += p.weight * fine.at(R * p.normal);
+    c.score = s;
+  };
+  for (RotCandidate& c : peaks) {
+    fineScore(c);
+    for (int it = 0; it < 12; ++it) {
+      RotCandidate best = c;
+      for (int i = -1; i <= 1; ++i)
+        for (int j = -1; j <= 1; ++j)
+          for (int k = -1; k <= 1; ++k) {
+            if ((!i && !j && !k) || (Y <= 0 && i) || (Tl <= 0 && (j || k))) continue;
+            RotCandidate n = c;
+            n.yaw += i * deg;
+            n.a += j * deg;
+            n.b += k * deg;
+            if (std::abs(n.yaw) > Y + 1e-12 || std::abs(n.a) > Tl + 1e-12 || std::abs(n.b) > Tl + 1e-12) continue;
+            fineScore(n);
+            if (n.score > best.score) best = n;
+          }
+      if (best.score <= c.score) break;
+      c = best;
+    }
+  }
+  std::sort(peaks.begin(), peaks.end(), better);
+  // Peaks that climbed onto one another: one of them.
+  std::vector<RotCandidate> out;
+  for (const RotCandidate& c : peaks) {
+    bool dup = false;
+    for (const RotCandidate& o : out)
+      if (std::abs(c.yaw - o.yaw) < 2 * deg && std::abs(c.a - o.a) < 2 * deg && std::abs(c.b - o.b) < 2 * deg) dup = true;
+    if (!dup) out.push_back(c);
+  }
+  return out;
+}
+
+/// One refinement (header, steps 2 and 3) from pose T.
+struct Refinement {
+  Pose T = Pose::Identity();
+  Mat6 H = Mat6::Zero();  ///< sum J^T w J at the final iteration
+  double chi2_per_point = 0.0;
+  int matched = 0;
+  double rms = 0.0;
+  double gate = 0.0;  ///< the final correspondence distance, m
+  /// sum w n n^T over the matched normals, w = 1 / var: the translation part of the information's shape
+  Mat3 scatter = Mat3::Zero();
+  std::vector<Vec3> frozen;
+  int iterations = 0;
+  bool converged = false;
+};
+
+class Refiner {
+ public:
+  Refiner(const ScanRegistrationConfig& cfg, const PlaneFinder& map, const std::vector<BodyPoint>& pts)
+      : cfg_(cfg), map_(map), pts_(pts) {
+    // The wide stages only have to reach the basin: a quarter of the points.
+    const std::size_t stride = std::max<std::size_t>(1, pts_.size() / std::max(1, cfg_.max_points / 4));
+    for (std::size_t i = 0; i < pts_.size(); i += stride) coarse_.push_back(pts_[i]);
+    // A typical lever arm: the median range of the points (rotation steps are compared at it).
+    std::vector<double> r;
+    for (const BodyPoint& p : pts_) r.push_back(p.p_imu.norm());
+    if (!r.empty()) {
+      std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+      lever_ = std::max(1.0, r[r.size() / 2]);
+    }
+  }
+
+  /// Stages of shrinking correspondence distance D from `D0`: each runs until its step is small, then
+  /// D becomes the smaller of D / 2 and 3 robust sigmas of its residuals (1.4826 x their median
+  /// absolute value), never below sigma_num x pointSigma(); the stage at that floor is the last.
+  Refinement run(const Pose& T_start, const Pose& T_init, double D0) const {
+    Refinement r;
+    r.T = T_start;
+    const double floor_gate = cfg_.sigma_num * cfg_.pointSigma();
+    double D = std::max(D0, floor_gate);
+    for (int guard = 0; guard < 16; ++guard) {
+      const bool last = D <= floor_gate * (1 + 1e-9);
+      const double robust_sigma = stage(r, D, last ? 2 * cfg_.stage_iterations : cfg_.stage_iterations);
+      if (r.matched < 6) return r;
+      if (last) break;
+      D = std::max(floor_gate, std::min(0.5 * D, 3.0 * robust_sigma));
+    }
+    r.gate = D;
+    if (!r.frozen.empty()) {
+      // Nothing is claimed along an unconstrained direction: the position along it goes back to the
+      // initial pose's, and the last stage runs again with it frozen.
+      Vec3 p = r.T.translation();
+      for (const Vec3& u : r.frozen) p -= u * u.dot(p - T_init.translation());
+      r.T.translation() = p;
+      stage(r, D, 2 * cfg_.stage_iterations, /*keep_frozen=*/true);
+    }
+    return r;
+  }
+
+ private:
+  struct Sums {
+    Mat6 H = Mat6::Zero();
+    Vec6d g = Vec6d::Zero();
+    double sq = 0.0, chi2 = 0.0;
+    int matched = 0;
+    Mat3 scatter = Mat3::Zero();
+    std::vector<double> abs_z;
+  };
+
+  /// Associates every point at T with correspondence distance D and sums the weighted normal equations.
+  Sums associate(const Pose& T, double D) const {
+    Sums s;
+    const Mat3 R = T.linear();
+    const double vs = map_.rootVoxelSize();
+    const double inflate = std::pow(D / cfg_.sigma_num, 2);
+    const double c2 = cfg_.cauchy_c * cfg_.cauchy_c;
+    // The wide stages (D at least twice the floor gate) use the subset.
+    const bool wide = D >= 2.0 * cfg_.sigma_num * cfg_.pointSigma();
+    // A plane whose points spread less than their own noise in its second direction (one scan line
+    // across a voxel) has no defined normal about that line: not used.
+    const double min_spread = cfg_.pointSigma() * cfg_.pointSigma();
+    const std::vector<BodyPoint>& pts = wide ? coarse_ : pts_;
+    std::vector<Candidates>& cache = wide ? coarse_cache_ : cache_;
+    cache.resize(pts.size());
+    // Within half a voxel of the point (D <= voxel / 2) the 2 x 2 x 2 root voxels nearest it hold every
+    // plane that can match: they are set by the point's half-voxel cell. Farther, the 3 x 3 x 3 around
+    // its root voxel.
+    const bool block27 = D > 0.5 * vs;
+    const double cell = block27 ? vs : 0.5 * vs;
+    auto& shared = block27 ? planes27_ : planes8_;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const BodyPoint& bp = pts[i];
+      const Vec3 pw = R * bp.p_imu + T.translation();
+      if (!keyablePoint(pw, vs)) continue;
+      // The candidate planes are fetched once per cell and call (the map does not change meanwhile),
+      // and a point keeps its cell's list while it stays in the cell.
+      const VoxelKey k = VoxelKey::fromPoint(pw, cell);
+      Candidates& c = cache[i];
+      if (!c.planes || c.block27 != block27 || c.key != k) {
+        c.block27 = block27;
+        c.key = k;
+        auto it = shared.find(k);
+        if (it == shared.end()) {
+          std::vector<const Plane*> list;
+          auto take = [&](const Plane& pl) {
+            if (pl.eig_mid >= min_spread) list.push_back(&pl);
+          };
+          if (block27) {
+            for (int a = -1; a <= 1; ++a)
+              for (int b = -1; b <= 1; ++b)
+                for (int l = -1; l <= 1; ++l) map_.visitPlanes({k.x + a, k.y + b, k.z + l}, take);
+          } else {
+            // Half-voxel cell h: root voxel floor(h / 2); the neighbour on each axis towards h's side.
+            auto root = [](std::int64_t h) { return h >= 0 ? h / 2 : -((-h + 1) / 2); };
+            const VoxelKey r{root(k.x), root(k.y), root(k.z)};
+            const int dx = k.x - 2 * r.x == 0 ? -1 : 1, dy = k.y - 2 * r.y == 0 ? -1 : 1, dz = k.z - 2 * r.z == 0 ? -1 : 1;
+            for (int a = 0; a < 2; ++a)
+              for (int b = 0; b < 2; ++b)
+                for (int l = 0; l < 2; ++l) map_.visitPlanes({r.x + a * dx, r.y + b * dy, r.z + l * dz}, take);
+          }
+          it = shared.emplace(k, std::move(list)).first;
+        }
+        c.planes = &it->second;
+      }
+      // The nearest plane within D whose in-plane gate (sigma_num radii) holds the point.
+      const Plane* plane = nullptr;
+      double z = 0.0, best = D;
+      for (const Plane* pl : *c.planes) {
+        const double dist = pl->signedDistance(pw);
+        if (std::abs(dist) >= best) continue;
+        const double in_plane_sq = std::max((pw - pl->center).squaredNorm() - dist * dist, 0.0);
+        const double rg = cfg_.sigma_num * pl->radius;
+        if (in_plane_sq > rg * rg) continue;
+        best = std::abs(dist);
+        plane = pl;
+        z = dist;
+      }
+      if (!plane) continue;
+      const Vec3& n = plane->normal;
+      const double var = pointToPlaneVariance(*plane, pw, R * bp.cov_imu * R.transpose()) + cfg_.residual_floor_var;
+      const double s2 = var + inflate;
+      const double w = 1.0 / (1.0 + z * z / (c2 * s2)) / s2;
+      Vec6d J;
+      J.head<3>() = hat(bp.p_imu) * R.transpose() * n;
+      J.tail<3>() = n;
+      s.H.noalias() += w * J * J.transpose();
+      s.g.noalias() += w * J * z;
+      s.sq += z * z;
+      s.chi2 += z * z / var;
+      s.scatter.noalias() += (n * n.transpose()) / var;
+      s.abs_z.push_back(std::abs(z));
+      ++s.matched;
+    }
+    return s;
+  }
+
+  /// Translation directions whose share of the normals' scatter is below min_share.
+  std::vector<Vec3> unconstrained(const Mat3& M) const {
+    std::vector<Vec3> out;
+    if (!(M.trace() > 0)) return out;
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(M);
+    for (int i = 0; i < 3; ++i)
+      if (std::sqrt(std::max(0.0, es.eigenvalues()(i)) / M.trace()) < cfg_.min_share)
+        out.push_back(es.eigenvectors().col(i).normalized());
+    return out;
+  }
+
+  /// Gauss-Newton iterations at correspondence distance D until the step is small: below a tenth of
+  /// the gate (position, and rotation at the points' median range) and, at the floor gate, below a
+  /// tenth of pointSigma() or the odometry's convergence thresholds, whichever is larger. Returns the
+  /// robust sigma of the last iteration's residuals. The unconstrained directions are found anew in
+  /// every iteration unless `keep_frozen`.
+  double stage(Refinement& r, double D, int iterations, bool keep_frozen = false) const {
+    const double floor_gate = cfg_.sigma_num * cfg_.pointSigma();
+    const double small_pos = std::max(cfg_.converge_pos_m, 0.1 * (D > floor_gate * (1 + 1e-9) ? D : cfg_.pointSigma()));
+    const double small_rot = std::max(cfg_.converge_rot_deg * M_PI / 180.0, small_pos / lever_);
+    r.converged = false;
+    double robust_sigma = 0.0;
+    for (int it = 0; it < iterations; ++it) {
+      Sums s = associate(r.T, D);
+      ++r.iterations;
+      r.matched = s.matched;
+      r.scatter = s.scatter;
+      if (s.matched < 6) {
+        r.H.setZero();
+        r.scatter.setZero();
+        r.rms = 0.0;
+        return 0.0;
+      }
+      r.rms = std::sqrt(s.sq / s.matched);
+      r.chi2_per_point = s.chi2 / s.matched;
+      r.H = s.H;
+      std::nth_element(s.abs_z.begin(), s.abs_z.begin() + s.abs_z.size() / 2, s.abs_z.end());
+      robust_sigma = 1.4826 * s.abs_z[s.abs_z.size() / 2];
+      if (!keep_frozen) r.frozen = unconstrained(r.scatter);
+      // Solve in the subspace orthogonal to the frozen translation directions.
+      Eigen::Matrix<double, 6, Eigen::Dynamic> Q(6, 6 - static_cast<int>(r.frozen.size()));
+      {
+        Mat6 P = Mat6::Identity();
+        for (const Vec3& u : r.frozen) {
+          Vec6d e = Vec6d::Zero();
+          e.tail<3>() = u;
+          P -= e * e.transpose();
+        }
+        const Eigen::SelfAdjointEigenSolver<Mat6> es(P);
+        Q = es.eigenvectors().rightCols(Q.cols());  // eigenvalue 1: the free subspace
+      }
+      const Eigen::MatrixXd Hq = Q.transpose() * s.H * Q;
+      const Eigen::VectorXd y = Hq.ldlt().solve(-(Q.transpose() * s.g));
+      Vec6d delta = Q * y;
+      if (!delta.allFinite()) delta.setZero();
+      r.T.linear() = r.T.linear() * expSO3(delta.head<3>());
+      r.T.translation() += delta.tail<3>();
+      if (delta.head<3>().norm() < small_rot && delta.tail<3>().norm() < small_pos) {
+        r.converged = true;
+        break;
+      }
+    }
+    return robust_sigma;
+  }
+
+  const ScanRegistrationConfig& cfg_;
+  const PlaneFinder& map_;
+  const std::vector<BodyPoint>& pts_;
+  std::vector<BodyPoint> coarse_;
+  /// A point's candidate planes and the cell they were fetched for.
+  struct Candidates {
+    bool block27 = false;
+    VoxelKey key;
+    const std::vector<const Plane*>* planes = nullptr;
+  };
+  mutable std::vector<Candidates> cache_, coarse_cache_;
+  /// The candidate planes by cell: root voxels (3 x 3 x 3 around) and half voxels (2 x 2 x 2 nearest).
+  mutable std::unordered_map<VoxelKey, std::vector<const Plane*>, VoxelKeyHash> planes27_, planes8_;
+  double lever_ = 10.0;
+};
+
+}  // namespace
+
+ScanRegistration::ScanRegistration(ScanRegistrationConfig cfg) : cfg_(cfg) {
+  if (!(cfg_.voxel_size_m > 0) || !(cfg_.range_noise_m > 0) || !(cfg_.min_eigen_value > 0) || !(cfg_.sigma_num > 0))
+    throw std::invalid_argument("ScanRegistration: voxel size, range noise, min_eigen_value and sigma_num must be > 0");
+  if (cfg_.search_levels < 1 || cfg_.search_levels > 12 || cfg_.search_points < 1 || cfg_.search_beam < 1 ||
+      cfg_.max_hypotheses < 1 || cfg_.max_points < 6 || cfg_.stage_iterations < 1)
+    throw std::invalid_argument("ScanRegistration: bad search or refinement sizes");
+}
+
+std::vector<BodyPoint> ScanRegistration::bodyPoints(const std::vector<Vec3>& scan) const {
+  std::vector<BodyPoint> out;
+  out.reserve(scan.size());
+  for (const Vec3& p : scan)
+    if (p.allFinite() && p.norm() > 1e-3) out.push_back({p, pointCovarianceBody(p, cfg_.range_noise_m, cfg_.beam_noise_deg)});
+  return out;
+}
+
+ScanRegistrationResult ScanRegistration::align(const std::vector<Vec3>& scan, const PlaneFinder& map,
+                                               const SearchMap& search, const Pose& T_init,
+                                               const SearchBounds& bounds) const {
+  return align(bodyPoints(scan), map, search, T_init, bounds);
+}
+
+ScanRegistrationResult ScanRegistration::align(const std::vector<BodyPoint>& scan, const PlaneFinder& map,
+                                               const SearchMap& search, const Pose& T_init,
+                                               const SearchBounds& bounds) const {
+  ScanRegistrationResult res;
+  res.T_world_body = T_init;
+  res.T_search = T_init;
+  std::vector<BodyPoint> pts;
+  for (const std::size_t i : spread(scan, 0.25 * cfg_.voxel_size_m, cfg_.max_points)) pts.push_back(scan[i]);
+  res.points = static_cast<int>(pts.size());
+  auto fail = [&](RegistrationFailure f, const std::string& why) {
+    res.success = false;
+    res.failure = f;
+    res.reason = std::string(toString(f)) + (why.empty() ? "" : ": " + why);
+    return res;
+  };
+  if (res.points < std::max(cfg_.min_matches, 6))
+    return fail(RegistrationFailure::TooFewPoints, std::to_string(res.points) + " points");
+
+  // 1. The correlative search: rotation hypotheses from the normals, then the translation of each.
+  struct Hypothesis {
+    Pose T = Pose::Identity();
+    int score = -1;
+  };
+  std::vector<Hypothesis> hyps;
+  const double cell0 = search.pyramid().cellSize(0);
+  const bool search_t = bounds.translation_m > 0 && !search.empty();
+  const bool search_r = (bounds.yaw_rad > 0 || bounds.tilt_rad > 0) && !search.empty();
+  std::vector<Vec3> q;  // the points the occupancy scores
+  if (search_t || search_r)
+    for (const std::size_t i : spread(scan, cell0, cfg_.search_points)) q.push_back(scan[i].p_imu);
+  std::vector<Mat3> rotations{T_init.linear()};
+  double occupancy_yaw = 0.0;  // yaw left to the occupancy search (when the normals cannot tell it)
+  if (search_r) {
+    std::vector<Vec3> body;
+    body.reserve(scan.size());
+    for (const BodyPoint& b : scan) body.push_back(b.p_imu);
+    std::vector<NormalPatch> patches =
+        planarPatches(body, cfg_.voxel_size_m, cfg_.min_eigen_value + cfg_.range_noise_m * cfg_.range_noise_m);
+    double reach = 0.0;
+    for (const NormalPatch& p : patches) reach = std::max(reach, p.center.norm());
+    if (patches.size() > static_cast<std::size_t>(cfg_.search_points)) {
+      std::vector<NormalPatch> sub;
+      const double stride = double(patches.size()) / cfg_.search_points;
+      for (int k = 0; k < cfg_.search_points; ++k) sub.push_back(patches[static_cast<std::size_t>(k * stride)]);
+      patches.swap(sub);
+    }
+    // The map's normals around the initial position: their density (2 deg cells) and elevations.
+    NormalDensity dens(2.0 * M_PI / 180.0), coarse(4.0 * M_PI / 180.0);
+    ElevationHistogram elev;
+    double map_weight = 0.0;
+    search.forEachNormal(T_init.translation(), reach + bounds.translation_m, [&](const Vec3& n, double w) {
+      dens.add(n, w);
+      coarse.add(n, w);
+      elev.add(n, w);
+      map_weight += w;
+    });
+    if (patches.size() >= kMinPatches && map_weight > 0) {
+      dens.blur();
+      coarse.blur();
+      elev.blur();
+      const std::vector<RotCandidate> rc =
+          rotationSearch(dens, coarse, elev, patches, T_init.linear(), std::max(0.0, bounds.yaw_rad),
+                         std::max(0.0, bounds.tilt_rad), kRotationPeaks);
+      rotations.clear();
+      for (const RotCandidate& c : rc) {
+        rotations.push_back(rotationOf(c, T_init.linear()));
+        if (static_cast<int>(rotations.size()) >= kRotationPeaks) break;
+      }
+      res.rotation_searched = true;
+    } else {
+      occupancy_yaw = std::max(0.0, bounds.yaw_rad);  // too few planar patches: the occupancy searches yaw
+    }
+  }
+  if (search_t || occupancy_yaw > 0) {
+    res.searched = true;
+    res.search_points = static_cast<int>(q.size());
+    int floor_score = 0;  // rotations that cannot come near the best so far are given up early
+    for (const Mat3& R : rotations) {
+      Pose T0 = T_init;
+      T0.linear() = R;
+      double yaw_step0 = 0.0;
+      std::vector<Candidate> cands = correlativeSearch(search.pyramid(), q, T0, SearchBounds{bounds.translation_m, occupancy_yaw},
+                                                       cfg_.search_beam, yaw_step0, floor_score);
+      if (!cands.empty())
+        floor_score = std::max(floor_score, static_cast<int>(std::floor(kAmbiguousScore * cands.front().score)));
+      if (cands.empty()) cands.push_back(Candidate{});
+      // With the yaw left to the occupancy, its distinct candidates are the hypotheses; else its best.
+      for (const Candidate& c : distinct(cands, occupancy_yaw > 0 ? cfg_.max_hypotheses : 1, cell0, yaw_step0)) {
+        Hypothesis h;
+        h.T.linear() = yawRotation(c.yaw) * R;
+        h.T.translation() = T_init.translation() + c.t;
+        h.score = c.score;
+        hyps.push_back(h);
+      }
+    }
+    // Best occupancy first (rotation hypotheses in their own order on ties).
+    std::stable_sort(hyps.begin(), hyps.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+    if (hyps.size() > static_cast<std::size_t>(cfg_.max_hypotheses)) hyps.resize(static_cast<std::size_t>(cfg_.max_hypotheses));
+    // Another rotation hypothesis explaining the scan nearly as well: the map constrains the rotation little.
+    if (hyps.size() > 1 && hyps[1].score >= kAmbiguousScore * hyps[0].score &&
+        rotationAngle(hyps[0].T.linear().transpose() * hyps[1].T.linear()) > 2.0 * (2.0 * M_PI / 180.0))
+      res.search_ambiguous = true;
+    res.search_hits = hyps.front().score;
+  } else {
+    for (const Mat3& R : rotations) {
+      Hypothesis h;
+      h.T = T_init;
+      h.T.linear() = R;
+      hyps.push_back(h);
+      if (static_cast<int>(hyps.size()) >= cfg_.max_hypotheses) break;
+    }
+  }
+  res.T_search = hyps.front().T;
+
+  // 2. Refinement from each distinct candidate until one passes the checks (3).
+  const Refiner refiner(cfg_, map, pts);
+  // The first correspondence distance: a voxel, or the search's quantisation (two finest cells) when
+  // coarser; with no search (both bounds 0) half a voxel.
+  const double start_gate =
+      res.searched || res.rotation_searched ? std::max(cfg_.voxel_size_m, 2.0 * cell0) : 0.5 * cfg_.voxel_size_m;
+  const int need = std::max(cfg_.min_matches, static_cast<int>(std::ceil(cfg_.min_inlier_share * res.points)));
+  ScanRegistrationResult kept;
+  bool have = false;
+  for (const Hypothesis& hyp : hyps) {
+    // Once one is registered, only the hypotheses the search could not rule out are refined: those
+    // within kAmbiguousScore of the best occupancy.
+    if (have && kept.success && hyp.score >= 0 && hyp.score < kAmbiguousScore * hyps.front().score) break;
+    const Refinement r = refiner.run(hyp.T, T_init, start_gate);
+    ScanRegistrationResult h = res;
+    h.T_world_body = r.T;
+    h.matched = r.matched;
+    h.rms_residual_m = r.rms;
+    h.iterations = r.iterations;
+    h.unconstrained_directions = r.frozen;
+    if (r.scatter.trace() > 0) {
+      const Eigen::SelfAdjointEigenSolver<Mat3> es(r.scatter);
+      h.weakest_share = std::sqrt(std::max(0.0, es.eigenvalues()(0)) / r.scatter.trace());
+      h.weakest_direction = es.eigenvectors().col(0).normalized();
+    }
+    Mat6 info = r.H / std::max(1.0, r.chi2_per_point);
+    if (!r.frozen.empty()) {
+      Mat6 P = Mat6::Identity();
+      for (const Vec3& u : r.frozen) {
+        Vec6d e = Vec6d::Zero();
+        e.tail<3>() = u;
+        P -= e * e.transpose();
+      }
+      info = P * info * P;
+    }
+    h.information = 0.5 * (info + info.transpose());
+    std::ostringstream why;
+    if (r.matched == 0) {
+      h.failure = RegistrationFailure::EmptyMap;
+      why << "no point found a plane";
+    } else if (r.matched < need) {
+      h.failure = RegistrationFailure::TooFewMatches;
+      why << r.matched << " of " << res.points << " points matched, need " << need;
+    } else if (r.rms > cfg_.maxRms()) {
+      h.failure = RegistrationFailure::HighResidual;
+      why << "RMS " << r.rms << " m > " << cfg_.maxRms() << " m";
+    } else if (!r.converged) {
+      h.failure = RegistrationFailure::NotConverged;
+      why << "no small step within " << 2 * cfg_.stage_iterations << " final iterations";
+    } else {
+      h.failure = RegistrationFailure::None;
+    }
+    h.success = h.failure == RegistrationFailure::None;
+    h.reason = h.success ? std::string() : std::string(toString(h.failure)) + ": " + why.str();
+    ++res.hypotheses_tried;
+    // Every hypothesis is refined: a success beats a failure, then the most matched points (all end at
+    // the same correspondence distance). Two successes that match about as many points at poses apart
+    // make the result ambiguous.
+    if (have && h.success && kept.success && std::min(h.matched, kept.matched) >= kAmbiguousScore * std::max(h.matched, kept.matched) &&
+        ((h.T_world_body.translation() - kept.T_world_body.translation()).norm() > 2.0 * cell0 ||
+         rotationAngle(h.T_world_body.linear().transpose() * kept.T_world_body.linear()) > 2.0 * (2.0 * M_PI / 180.0)))
+      res.search_ambiguous = true;
+    if (!have || (h.success && !kept.success) || (h.success == kept.success && h.matched > kept.matched)) {
+      kept = std::move(h);
+      have = true;
+    }
+  }
+  kept.hypotheses_tried = res.hypotheses_tried;
+  kept.search_ambiguous = res.search_ambiguous;
+  return kept;
+}
+
+}  // namespace livo
