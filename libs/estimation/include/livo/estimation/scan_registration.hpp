@@ -220,8 +220,8 @@ class SearchMap {
   std::unordered_set<VoxelKey, VoxelKeyHash> seen_;  ///< finest cells inserted
   double voxel_m_, patch_eigen_;
   double tile_m_;
-  /// Per tile, the normals' weights summed by direction (key of the normal at a 1 deg cell, sign
-  /// folded so that the first non-zero coordinate is positive).
+  /// Per tile, the normals' weights summed by direction (key of the normal at a 1 deg cell, the sign
+  /// chosen so that z > 0, or y > 0 when z = 0, or x > 0 when both are 0).
   std::unordered_map<VoxelKey, std::unordered_map<VoxelKey, double, VoxelKeyHash>, VoxelKeyHash> normals_;
 };
 
