@@ -6,6 +6,7 @@
 #include "livo/sensors/downsample.hpp"
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 #include <sstream>
 
@@ -35,7 +36,8 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
     if (init_.add(s)) break;  // the rest of the frame's samples are propagated below
   }
   // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
-  const bool motion_converged = motion_->process(frame);
+  const Frame* scan = completeScan(frame);
+  const bool motion_converged = scan ? motion_->process(*scan) : motion_->converged();
   const bool deadline = init_.firstSampleTime() >= 0 &&
                         toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds();
   if (init_.done()) {
@@ -63,6 +65,58 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
   }
   if (deadline && initCoarse(frame)) return InitStep::Coarse;
   return InitStep::Waiting;
+}
+
+namespace {
+
+/// 10-degree azimuth cells (about the LiDAR's z axis) that the sweep's points fall in.
+std::bitset<36> azimuthCells(const LidarScan& sweep) {
+  std::bitset<36> cells;
+  for (const auto& pt : sweep.points) {
+    const double az = std::atan2(double(pt.p_lidar.y()), double(pt.p_lidar.x()));
+    if (!std::isfinite(az)) continue;
+    cells.set(std::min(35, std::max(0, int((az + M_PI) / (2.0 * M_PI) * 36.0))));
+  }
+  return cells;
+}
+
+}  // namespace
+
+const Frame* LioOdometry::completeScan(const Frame& frame) {
+  // A frame cut at an image time holds only part of a spinning LiDAR's revolution (a wedge of
+  // 120 degrees with a camera at three times the LiDAR's rate), and a wedge constrains the pose in
+  // few directions: the motion initialiser registers whole scans. Consecutive frames are joined until
+  // the next one comes back to directions the joined ones already cover (more than half of its cells):
+  // one revolution of a spinning LiDAR, one frame of a Livox (every frame covers the whole field of view).
+  // A joined scan longer than kMaxScanSeconds is handed over whatever it covers (no LiDAR in use turns
+  // slower than 5 Hz; frames without a finite azimuth never revisit).
+  constexpr double kMaxScanSeconds = 1.0;
+  const std::bitset<36> cells = azimuthCells(frame.sweep);
+  const bool first = !pending_scan_.has_value();
+  const bool revisits = !first && 2 * (cells & pending_cells_).count() > cells.count();
+  const bool too_long = !first && toSeconds(frame.utime - pending_scan_->sweep.utime) > kMaxScanSeconds;
+  if (!first && !revisits && !too_long && !frame.sweep.points.empty()) {
+    Frame& p = *pending_scan_;
+    const float shift = float(toSeconds(frame.sweep.utime - p.sweep.utime));
+    for (LidarPoint pt : frame.sweep.points) {
+      pt.time_offset_s += shift;
+      p.sweep.points.push_back(pt);
+    }
+    for (const auto& s : frame.imu)
+      if (p.imu.empty() || s.utime > p.imu.back().utime) p.imu.push_back(s);
+    p.utime = frame.utime;
+    pending_cells_ |= cells;
+    return nullptr;
+  }
+  // The joined frames are a whole scan: hand them over, this frame starts the next one.
+  complete_scan_ = std::move(pending_scan_);
+  pending_scan_.emplace();  // the frame without its image
+  pending_scan_->utime = frame.utime;
+  pending_scan_->sweep_start_utime = frame.sweep_start_utime;
+  pending_scan_->imu = frame.imu;
+  pending_scan_->sweep = frame.sweep;
+  pending_cells_ = cells;
+  return complete_scan_ ? &*complete_scan_ : nullptr;
 }
 
 bool LioOdometry::initCoarse(const Frame& frame) {
@@ -199,7 +253,14 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
     const InitStep step = initialise(frame);
     if (step == InitStep::Waiting) return false;
     initialized_ = true;
-    if (step == InitStep::InMotion) {  // this frame's points are registered and undistorted already
+    pending_scan_.reset();
+    complete_scan_.reset();
+    if (step == InitStep::InMotion && filter_.x().utime < frame.utime) {
+      // The motion initialiser's state is at the end of the last complete scan, before this frame:
+      // this frame is propagated and registered as any other, its scan seeds the map.
+      motion_.reset();
+      map_started_ = false;
+    } else if (step == InitStep::InMotion) {  // this frame's points are registered and undistorted already
       r.initialized = true;
       r.points = std::move(motion_->points());
       r.n_points = static_cast<int>(r.points.size());

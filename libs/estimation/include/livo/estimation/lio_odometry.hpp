@@ -14,7 +14,9 @@
 #include "livo/map/voxel_map_config.hpp"
 #include "livo/sensors/preprocess_config.hpp"
 
+#include <bitset>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace livo {
@@ -104,6 +106,11 @@ class LioOdometry {
   void initAtRest(const Frame& frame);
   /// The deadline passed (ImuConfig::deadlineSeconds()): start from ImuInitializer::coarseState().
   bool initCoarse(const Frame& frame);
+  /// Frames joined into whole scans for the motion initialiser: the joined frames when `frame` comes
+  /// back to directions they already cover (nullptr while they do not; see the .cpp).
+  const Frame* completeScan(const Frame& frame);
+  std::optional<Frame> pending_scan_, complete_scan_;
+  std::bitset<36> pending_cells_;
   /// x_ / P_ through the samples of `samples` after x_'s time and before this frame's own samples
   /// begin (the frame's propagation keeps its trace for the undistortion).
   void propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame);
