@@ -23,10 +23,23 @@ void MotionInitConfig::load(const ConfigNode& n) {
   n.check(max_speed_mps >= 0 && max_speed_mps <= 100, "init_motion_max_speed_mps", "must be in [0, 100] m/s");
 }
 
+namespace {
+
+ScanRegistrationConfig startRegistration(const LioConfig& lio, const VoxelMapConfig& map, int min_matches) {
+  ScanRegistrationConfig c = ScanRegistrationConfig::from(lio, map, min_matches);
+  // The first fixes register against a map of one or two scans, whose planes cover a share of the next
+  // scan's points only (a sparse 5 Hz spinning LiDAR's second scan: 16 % of its points at the true pose).
+  c.min_inlier_share = 0.1;
+  return c;
+}
+
+}  // namespace
+
 MotionInitializer::MotionInitializer(const ImuConfig& imu, MotionInitConfig cfg, VoxelMapConfig map, LioConfig lio,
                                      int min_matches, const Pose& T_imu_lidar)
     : imu_(imu), cfg_(cfg), lio_(lio), min_matches_(min_matches), T_imu_lidar_(T_imu_lidar),
-      map_(std::make_unique<VoxelMap>(map)), first_map_(std::make_unique<VoxelMap>(map)), occupancy_(0.15, 5) {}
+      map_(std::make_unique<VoxelMap>(map)), first_map_(std::make_unique<VoxelMap>(map)),
+      registration_(startRegistration(lio, map, min_matches)), search_(registration_.config()) {}
 
 namespace {
 
@@ -74,7 +87,7 @@ bool MotionInitializer::start(const Frame& frame) {
   if (!(norm > 1e-3) || !std::isfinite(norm)) return false;  // no usable specific force yet
   accel_scale_ = norm < 4.0 ? imu_.gravity_m_s2 : 1.0;     // g units or m/s^2
   map_->clear();
-  occupancy_.clear();
+  search_.clear();
   fixes_.clear();
   samples_ = frame.imu;
   v_cv_ = Vec3::Zero();
@@ -145,19 +158,21 @@ double MotionInitializer::weakestShare() const {
 
 Vec3 MotionInitializer::searchPosition(const Mat3& R_pred, const Vec3& p_pred, double dt) const {
   const double radius = cfg_.max_speed_mps * dt;
-  if (occupancy_.empty() || points_.empty() || !(radius > 0.05)) return p_pred;
-  // Only where the map's planes constrain every direction (the normals' scatter, weighted by points):
-  // along a wall or a corridor's axis the occupancy score is flat but for the scan pattern's sampling
-  // (a Mid-360's rings on the ground), and its best is noise.
-  if (weakestShare() < kConstrainedShare) return p_pred;
-  // At most 512 points, spread over the sweep: the cost is points x candidates.
-  std::vector<Vec3> q;
-  const double stride = std::max(1.0, double(points_.size()) / 512.0);
-  for (double f = 0; f < double(points_.size()); f += stride) q.push_back(R_pred * points_[std::size_t(f)].p_imu);
-  // Within two of its finest cells the search's answer is no better than the prediction (and its
-  // quantisation, over a frame interval, a velocity error): there the registration alone converges.
-  const Vec3 t = occupancy_.search(q, p_pred, radius).t;
-  return (t - p_pred).norm() > 2.0 * occupancy_.cellSize(0) ? t : p_pred;
+  if (search_.empty() || points_.empty() || !(radius > 0.05)) return p_pred;
+  // The scan registration (scan_registration.hpp): a correlative search within the speed limit, then a
+  // robust coarse-to-fine point-to-plane refinement; along a direction the map leaves free (a wall, a
+  // corridor's axis) it keeps the prediction. The rotation is the gyro's (a frame interval's drift
+  // is far below the search's resolution).
+  Pose T0 = Pose::Identity();
+  T0.linear() = R_pred;
+  T0.translation() = p_pred;
+  SearchBounds bounds;
+  bounds.translation_m = radius;
+  const ScanRegistrationResult res = registration_.align(points_, *map_, search_, T0, bounds);
+  if (!res.success) return p_pred;
+  // Within two range noises the answer is no better than the prediction.
+  const Vec3 t = res.T_world_body.translation();
+  return (t - p_pred).norm() > 2.0 * lio_.range_noise_m ? t : p_pred;
 }
 
 void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R, const Vec3& p) {
@@ -168,11 +183,13 @@ void MotionInitializer::insert(const std::vector<BodyPoint>& pts, const Mat3& R,
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   const WorldPointCovariance point_cov(x, P);
+  std::vector<Vec3> searched;
   for (const auto& bp : pts) {
     const Vec3 q = R * bp.p_imu;
     world.push_back({q + p, point_cov(bp, q)});
-    if (fixes_.size() < 3) occupancy_.insert(q + p);  // the map the first fixes search
+    if (fixes_.size() < 3) searched.push_back(q + p);  // the map the first fixes search
   }
+  if (!searched.empty()) search_.addPoints(searched);
   map_->insert(world);
 }
 
@@ -189,7 +206,7 @@ void MotionInitializer::rebuildMap(bool final) {
     tp.p_world_imu = R_end_T * (tp.p_world_imu - p_end);
   }
   map_->clear();
-  occupancy_.clear();
+  search_.clear();
   insert(prepare(first_sweep_, trace), Mat3::Identity(), Vec3::Zero());
   if (final) {
     first_sweep_ = LidarScan{};
@@ -239,7 +256,7 @@ bool MotionInitializer::process(const Frame& frame) {
     rest_trace = gyroTrace(held, last.utime, frame.utime, last.R, Vec3::Zero(), Vec3::Zero());
   }
   samples_.insert(samples_.end(), frame.imu.begin(), frame.imu.end());
-  if (fixes_.size() >= 3) occupancy_.clear();
+  if (fixes_.size() >= 3) search_.clear();
   if (points_.empty() || !registerFrame(R_pred, p_pred, R, p)) return solved_;
   Fix fix{frame.utime, R, p};
   {
@@ -441,17 +458,49 @@ bool MotionInitializer::fixesFailedAtRest(Utime from) const {
   return n >= 2 && at_origin >= min_matches_ * n / 2 && 2 * at_origin >= at_fix;
 }
 
+Mat3 MotionInitializer::constrainedProjector() const {
+  Mat3 H = Mat3::Zero();
+  map_->forEachPlane([&H](const VoxelKey&, const Plane& pl) {
+    if (pl.is_plane) H += double(pl.num_points) * pl.normal * pl.normal.transpose();
+  });
+  if (!(H.trace() > 0)) return Mat3::Identity();
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(H / H.trace());
+  Mat3 P = Mat3::Zero();
+  for (int k = 0; k < 3; ++k)
+    if (std::sqrt(std::max(0.0, es.eigenvalues()(k))) >= kConstrainedShare)
+      P += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose();
+  return P;
+}
+
 bool MotionInitializer::atRestSince(Utime from, double tolerance_m, bool& known) const {
-  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  // Along a direction the map's planes leave free (a wall's, a corridor's axis) the fixes slide
+  // whatever the rig does: a spread there refutes rest only where the first scan resolves the
+  // fixes' offsets and the scans match it at their fixes clearly better than at its own position.
+  const Mat3 Pc = constrainedProjector();
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300), plo = lo, phi = hi;
   int n = 0;
   for (const Fix& f : fixes_) {
     if (f.utime < from) continue;
     lo = lo.cwiseMin(f.p);
     hi = hi.cwiseMax(f.p);
+    plo = plo.cwiseMin(Pc * f.p);
+    phi = phi.cwiseMax(Pc * f.p);
     ++n;
   }
   known = n >= 2;
-  return known && ((hi - lo).norm() <= tolerance_m || fixesFailedAtRest(from));
+  if (!known) return false;
+  if ((hi - lo).norm() <= tolerance_m) return true;
+  if ((phi - plo).norm() > tolerance_m) return fixesFailedAtRest(from);
+  const double resolvable_m = 3.0 * fixSigma(lio_);
+  int at_origin = 0, at_fix = 0, resolved = 0;
+  for (const Fix& f : fixes_) {
+    if (f.utime < from || f.matches_at_fix < 0 || !(f.shift_on_normals_m > resolvable_m)) continue;
+    at_origin += f.matches_at_origin;
+    at_fix += f.matches_at_fix;
+    ++resolved;
+  }
+  const bool moved = resolved >= 2 && at_fix > 2 * at_origin;
+  return !moved;
 }
 
 std::string MotionInitializer::describe() const {

@@ -32,7 +32,7 @@
 #include "livo/estimation/lio_update.hpp"
 #include "livo/estimation/state.hpp"
 #include "livo/estimation/undistort.hpp"
-#include "livo/map/occupancy_search.hpp"
+#include "livo/estimation/scan_registration.hpp"
 #include "livo/map/voxel_map.hpp"
 
 #include <functional>
@@ -72,7 +72,7 @@ class MotionInitializer {
   /// points() are the last frame's points (IMU frame at its time).
   void takeOver(NavState& x, StateCov& P);
   /// Whether the LiDAR saw the rig at rest since `from`: the fixes since then stay within
-  /// `tolerance_m` of each other, or, when the fixes do not fit one motion (failed registrations, e.g.
+  /// `tolerance_m` of each other along the directions the map constrains (constrainedProjector), or, when the fixes do not fit one motion (failed registrations, e.g.
   /// on a first map of planes one scan line wide), the scans since then match the first scan at its
   /// position at least half as well as at their fixes, counted over the fixes whose offset from that
   /// position the first scan's planes resolve. `known` is false with fewer than two fixes there.
@@ -84,6 +84,9 @@ class MotionInitializer {
   /// The weakest direction's share of the map planes' normal scatter (sqrt of the smallest
   /// eigenvalue over the trace, weighted by points): about 0 along a wall or a corridor's axis.
   double weakestShare() const;
+  /// Projector onto the translation directions the map's planes constrain (eigen-directions of the
+  /// point-weighted normal scatter with a share of at least kConstrainedShare); identity without planes.
+  Mat3 constrainedProjector() const;
   /// While not converged: fixes registered of those needed, and why the solution is not taken.
   std::string status() const;
   /// The velocity of the last two fixes in the IMU frame of the last one: the coarse start's velocity
@@ -146,7 +149,8 @@ class MotionInitializer {
   }
   std::unique_ptr<VoxelMap> map_;
   std::unique_ptr<VoxelMap> first_map_;  ///< the first scan alone, at rest (the rest test's reference)
-  OccupancyPyramid occupancy_;     ///< of map_'s points while the first fixes are searched
+  ScanRegistration registration_;  ///< the first fixes' search (no speed needed)
+  SearchMap search_;               ///< of map_'s points while the first fixes are searched
   double accel_scale_ = 1.0;
   bool started_ = false, solved_ = false, rebuilt_ = false;
   Vec3 v_cv_ = Vec3::Zero();       ///< constant velocity of the last two fixes (world = first IMU frame)
