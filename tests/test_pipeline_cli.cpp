@@ -235,7 +235,12 @@ TEST(LivoRun, NoPoseExitsOneNamingTheCauseAndHealthSaysWhenPosesStarted) {
       EXPECT_DOUBLE_EQ(livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s"), -1.0);
     } else {
       EXPECT_EQ(r.rc, 0) << r.err;
-      EXPECT_NE(r.err.find("coarse start at the 1.5 s deadline"), std::string::npos) << r.err;
+      // How it started, said on stderr (rig 1 rests 0.09 s, then ramps up over 0.6 s: since 2026-12-07 its
+      // calm window is taken as rest, the fixes not refuting it along the directions the map constrains;
+      // before, the deadline's coarse start came).
+      EXPECT_TRUE(r.err.find("IMU initialised") != std::string::npos ||
+                  r.err.find("coarse start at the 1.5 s deadline") != std::string::npos)
+          << r.err;
       const double delay = livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s");
       EXPECT_GE(delay, 1.3);  // the deadline counts from the first IMU sample, the delay from the first frame
       EXPECT_LE(delay, 1.7);

@@ -91,6 +91,31 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
   out = sums;
 }
 
+/// Translation directions whose share sqrt(lambda / trace) of the matched planes' weighted normal
+/// scatter (the position block of H^T R^-1 H) is below kMinShare get no information: there the few
+/// matches off the dominant planes mostly carry the planes' own fitting error (a map of one scan, a
+/// corridor's walls), whose bias would move the position and, through the prior, the velocity.
+constexpr double kMinShare = 0.1;
+
+void projectFreeDirections(Mat66& HtRH, Vec66& HtRz) {
+  const Mat3 M = HtRH.bottomRightCorner<3, 3>();
+  const double tr = M.trace();
+  if (!(tr > 0)) return;
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(M / tr);
+  Mat3 Pc = Mat3::Identity();
+  bool any = false;
+  for (int k = 0; k < 3; ++k)
+    if (std::sqrt(std::max(0.0, es.eigenvalues()(k))) < kMinShare) {
+      Pc -= es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose();
+      any = true;
+    }
+  if (!any) return;
+  Mat66 T = Mat66::Identity();
+  T.bottomRightCorner<3, 3>() = Pc;
+  HtRH = T * HtRH * T;
+  HtRz = T * HtRz;
+}
+
 }  // namespace
 
 LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoint>& points, const PlaneFinder& map,
@@ -150,6 +175,7 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
 
     // 3. Information-form IEKF step: K_bar = (H^T R^-1 H + P^-1)^-1,
     //    delta = -K_bar H^T R^-1 z + Delta - K_bar H^T R^-1 H Delta[0:6], Delta = x_prop [-] x.
+    projectFreeDirections(HtRH, HtRz);
     StateCov info = P_prop_inv;
     info.topLeftCorner<6, 6>() += HtRH;
     K_bar = info.ldlt().solve(StateCov::Identity());
