@@ -65,7 +65,7 @@ TEST_P(RandomRig, StartsEarlyHoldsAndStaysAccurate) {
 // corridor with small cameras: about 369 s of CPU (5:12 wall on the 2-core machine, 2026-12-07) against
 // 699 s for the nine rigs of the previous subset (seeds 1-7, 28, 33 of the previous distribution).
 // Not in the subset because today's start fails it: a CAR moving from the first sample. Seeds 5 and 70
-// (streets; spinning32 at 5 Hz with a 15 Hz camera, Mid-360 at 5 Hz with a 15 Hz camera) give 14.8 m and
+// (streets; spinning32 at 5 Hz with a 15 Hz camera, Mid-360 at 5 Hz with a 15 Hz camera) give 16.8 m and
 // 36.7 m ATE over 12 s on main (2026-12-07; 16.2 and 50.4 m in the morning): seed 5's IMU window looks
 // static at constant speed and the street constrains its fixes along the road too little to refute the
 // rest. Seed 76 (spinning32 at 10 Hz) passes (0.26 m over 65 m) but not by a margin: variants of the start

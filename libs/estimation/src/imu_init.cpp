@@ -121,9 +121,6 @@ StateCov ImuInitializer::prior(const Mat3& R, double var_tilt, double var_bg) co
   // positive definite).
   P.block<3, 3>(kRot, kRot) = R.transpose() * Vec3(var_tilt, var_tilt, 1e-8).asDiagonal() * R;
   P.block<3, 3>(kBa, kBa) = Mat3::Identity() * cfg_.init_accel_bias_sigma_mps2 * cfg_.init_accel_bias_sigma_mps2;
-  // The start's position is the world's origin, as its yaw is the world's yaw: no doubt (a prior of
-  // 0.1 m let the second scan slide 7.6 cm along a corridor's axis, where the LiDAR constrains little).
-  P.block<3, 3>(kPos, kPos) = Mat3::Identity() * 1e-6;
   return P;
 }
 
