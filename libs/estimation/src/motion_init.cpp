@@ -146,11 +146,16 @@ bool MotionInitializer::registerFrame(const Mat3& R_pred, const Vec3& p_pred, Ma
   return true;
 }
 
-double MotionInitializer::weakestShare() const {
+Mat3 MotionInitializer::normalScatter() const {
   Mat3 H = Mat3::Zero();
   map_->forEachPlane([&H](const VoxelKey&, const Plane& pl) {
     if (pl.is_plane) H += double(pl.num_points) * pl.normal * pl.normal.transpose();
   });
+  return H;
+}
+
+double MotionInitializer::weakestShare() const {
+  const Mat3 H = normalScatter();
   if (!(H.trace() > 0)) return 0.0;
   const double weakest = Eigen::SelfAdjointEigenSolver<Mat3>(H / H.trace(), Eigen::EigenvaluesOnly).eigenvalues()(0);
   return std::sqrt(std::max(0.0, weakest));
@@ -459,10 +464,7 @@ bool MotionInitializer::fixesFailedAtRest(Utime from) const {
 }
 
 Mat3 MotionInitializer::constrainedProjector() const {
-  Mat3 H = Mat3::Zero();
-  map_->forEachPlane([&H](const VoxelKey&, const Plane& pl) {
-    if (pl.is_plane) H += double(pl.num_points) * pl.normal * pl.normal.transpose();
-  });
+  const Mat3 H = normalScatter();
   if (!(H.trace() > 0)) return Mat3::Identity();
   const Eigen::SelfAdjointEigenSolver<Mat3> es(H / H.trace());
   Mat3 P = Mat3::Zero();

@@ -87,6 +87,8 @@ class MotionInitializer {
   /// Projector onto the translation directions the map's planes constrain (eigen-directions of the
   /// point-weighted normal scatter with a share of at least kConstrainedShare); identity without planes.
   Mat3 constrainedProjector() const;
+  /// Sum over the map's planes of N_j n_j n_j^T (N_j their point counts).
+  Mat3 normalScatter() const;
   /// While not converged: fixes registered of those needed, and why the solution is not taken.
   std::string status() const;
   /// The velocity of the last two fixes in the IMU frame of the last one: the coarse start's velocity
