@@ -452,15 +452,20 @@ bool MotionInitializer::fixesFailedAtRest(Utime from) const {
   // Only fixes whose offset from the first scan's position the first scan's planes resolve (the offset
   // projected on the normals of the planes matched there, RMS, beyond the fixes' 3-sigma): a rig that
   // slides along a wall matches it as well at the origin as at its fix, which is no evidence of rest.
+  const ResolvedMatches m = resolvedMatches(from);
+  return m.fixes >= 2 && m.at_origin >= min_matches_ * m.fixes / 2 && 2 * m.at_origin >= m.at_fix;
+}
+
+MotionInitializer::ResolvedMatches MotionInitializer::resolvedMatches(Utime from) const {
   const double resolvable_m = 3.0 * fixSigma(lio_);
-  int n = 0, at_origin = 0, at_fix = 0;
+  ResolvedMatches m;
   for (const Fix& f : fixes_) {
     if (f.utime < from || f.matches_at_fix < 0 || !(f.shift_on_normals_m > resolvable_m)) continue;
-    at_origin += f.matches_at_origin;
-    at_fix += f.matches_at_fix;
-    ++n;
+    m.at_origin += f.matches_at_origin;
+    m.at_fix += f.matches_at_fix;
+    ++m.fixes;
   }
-  return n >= 2 && at_origin >= min_matches_ * n / 2 && 2 * at_origin >= at_fix;
+  return m;
 }
 
 Mat3 MotionInitializer::constrainedProjector() const {
@@ -493,15 +498,8 @@ bool MotionInitializer::atRestSince(Utime from, double tolerance_m, bool& known)
   if (!known) return false;
   if ((hi - lo).norm() <= tolerance_m) return true;
   if ((phi - plo).norm() > tolerance_m) return fixesFailedAtRest(from);
-  const double resolvable_m = 3.0 * fixSigma(lio_);
-  int at_origin = 0, at_fix = 0, resolved = 0;
-  for (const Fix& f : fixes_) {
-    if (f.utime < from || f.matches_at_fix < 0 || !(f.shift_on_normals_m > resolvable_m)) continue;
-    at_origin += f.matches_at_origin;
-    at_fix += f.matches_at_fix;
-    ++resolved;
-  }
-  const bool moved = resolved >= 2 && at_fix > 2 * at_origin;
+  const ResolvedMatches m = resolvedMatches(from);
+  const bool moved = m.fixes >= 2 && m.at_fix > 2 * m.at_origin;
   return !moved;
 }
 

@@ -132,6 +132,13 @@ class MotionInitializer {
   /// The fixes since `from` (at least two) fail to fit one motion, and the scans match the first scan at
   /// its position about as well as at their fixes: the registrations, not the rig, moved.
   bool fixesFailedAtRest(Utime from) const;
+  /// Over the fixes since `from` whose offset from the first scan's position that scan resolves (the
+  /// offset on the normals of the planes matched there above 3 fix sigmas): their count and their scans'
+  /// matches against the first scan at its position and at the fixes.
+  struct ResolvedMatches {
+    int fixes = 0, at_origin = 0, at_fix = 0;
+  };
+  ResolvedMatches resolvedMatches(Utime from) const;
   /// The map from the first scan undistorted along v_cv_; `final`: the first scan is then dropped.
   void rebuildMap(bool final);
   /// The latest fix at least 50 ms before t (nullptr if none).
