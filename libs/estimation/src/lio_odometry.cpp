@@ -255,20 +255,12 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
     initialized_ = true;
     pending_scan_.reset();
     complete_scan_.reset();
-    if (step == InitStep::InMotion && filter_.x().utime < frame.utime) {
-      // The motion initialiser's state is at the end of the last complete scan, before this frame:
-      // this frame is propagated and registered as any other, its scan seeds the map.
+    if (step == InitStep::InMotion) {
+      // The motion initialiser's state is at the end of the last whole scan, before this frame (a scan
+      // is known whole when the next frame arrives): this frame is propagated and registered as any
+      // other, and its scan seeds the odometry's map.
       motion_.reset();
       map_started_ = false;
-    } else if (step == InitStep::InMotion) {  // this frame's points are registered and undistorted already
-      r.initialized = true;
-      r.points = std::move(motion_->points());
-      r.n_points = static_cast<int>(r.points.size());
-      recordState(r);
-      motion_.reset();
-      map_started_ = false;  // the odometry's map starts with this frame's scan
-      r.lio_ms = watch.elapsedMs();
-      return true;
     }
   }
   r.initialized = true;

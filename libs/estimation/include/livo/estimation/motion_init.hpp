@@ -68,8 +68,7 @@ class MotionInitializer {
   /// feeding frames, e.g. while a static window may still come).
   bool process(const Frame& frame);
   bool converged() const { return solved_; }
-  /// The state at the last frame, world rotated to gravity (gravity_align), with its covariance;
-  /// points() are the last frame's points (IMU frame at its time).
+  /// The state at the last frame processed, world rotated to gravity (gravity_align), with its covariance.
   void takeOver(NavState& x, StateCov& P);
   /// Whether the LiDAR saw the rig at rest since `from`: the fixes since then stay within
   /// `tolerance_m` of each other along the directions the map constrains (constrainedProjector), or, when the fixes do not fit one motion (failed registrations, e.g.
@@ -78,7 +77,6 @@ class MotionInitializer {
   /// position the first scan's planes resolve. `known` is false with fewer than two fixes there.
   bool atRestSince(Utime from, double tolerance_m, bool& known) const;
   double accelScale() const { return accel_scale_; }
-  std::vector<BodyPoint>& points() { return points_; }
   int fixes() const { return static_cast<int>(fixes_.size()); }
   std::string describe() const;
   /// The weakest direction's share of the map planes' normal scatter (sqrt of the smallest
