@@ -232,6 +232,84 @@ TEST(LioUpdate, MatchesBatchGaussNewtonWithWeakPrior) {
   EXPECT_LT((x_filter.p_world_imu - truth.p_world_imu).norm(), 0.005);
 }
 
+namespace {
+
+// A corridor (walls, floor and ceiling along x, nothing across it): the LiDAR constrains y and z only.
+std::vector<Vec3> corridorScene(std::mt19937& rng, int per_face) {
+  std::uniform_real_distribution<double> along(-12.0, 12.0), u(0.0, 1.0);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < per_face; ++i) {
+    pts.emplace_back(along(rng), -1.5, 2.5 * u(rng));
+    pts.emplace_back(along(rng), 1.5, 2.5 * u(rng));
+    pts.emplace_back(along(rng), 3.0 * u(rng) - 1.5, 0.0);
+    pts.emplace_back(along(rng), 3.0 * u(rng) - 1.5, 2.5);
+  }
+  return pts;
+}
+
+}  // namespace
+
+// Along a direction the planes do not constrain (a corridor's axis) the update neither measures nor
+// moves the position and velocity when the prior is far wider there than across (a start, a long
+// wall): a prior whose wide axis is tilted 2.3 deg from the corridor's (an earlier frame's free
+// direction) would otherwise turn the floor's 3 cm correction into 0.75 m along the axis. With a
+// round prior the same scene leaves the axis where the IMU's correlations put it.
+TEST(LioUpdate, FreeDirectionNotMovedThroughAWidePriorsCorrelation) {
+  std::mt19937 rng(23);
+  std::normal_distribution<double> noise(0, 0.005);
+  VoxelMap map(VoxelMapConfig{});
+  std::vector<PointWithCov> mpts;
+  for (const auto& p : corridorScene(rng, 8000)) {
+    PointWithCov pw;
+    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
+    pw.cov_world = Mat3::Identity() * 2.5e-5;
+    mpts.push_back(pw);
+  }
+  map.insert(mpts);
+  NavState truth;
+  truth.p_world_imu = Vec3(0.0, 0.2, 1.2);
+  const std::vector<BodyPoint> body = scanFrom(truth, corridorScene(rng, 600), rng, noise, 2.5e-5);
+
+  // Prior: 1 m along e = (1, 0, 0.04) (normalised), 1 cm across, the same for the velocity (1 m/s,
+  // 1 cm/s) and fully correlated with the position; 3 cm too high.
+  const Vec3 e = Vec3(1.0, 0.0, 0.04).normalized();
+  const Mat3 wide = e * e.transpose() * 1.0 + (Mat3::Identity() - e * e.transpose()) * 1e-4;
+  StateCov P0 = initialCovariance();
+  P0.block<3, 3>(sidx::kRot, sidx::kRot) = Mat3::Identity() * 1e-6;
+  P0.block<3, 3>(sidx::kPos, sidx::kPos) = wide;
+  P0.block<3, 3>(sidx::kVel, sidx::kVel) = wide;
+  P0.block<3, 3>(sidx::kPos, sidx::kVel) = 0.99 * wide;
+  P0.block<3, 3>(sidx::kVel, sidx::kPos) = 0.99 * wide;
+  NavState x0 = truth;
+  x0.p_world_imu.z() += 0.03;
+  LioConfig cfg;
+  cfg.max_iterations = 10;
+
+  NavState x = x0;
+  StateCov P = P0;
+  const LioUpdateResult r = lidarUpdate(x, P, body, map, cfg);
+  ASSERT_GT(r.matched, 2000);
+  EXPECT_LT(std::abs(x.p_world_imu.z() - truth.p_world_imu.z()), 0.005);  // the floor's correction
+  EXPECT_LT(std::abs(x.p_world_imu.x() - x0.p_world_imu.x()), 0.005);     // nothing along the axis
+  EXPECT_LT(std::abs(x.v_world.x() - x0.v_world.x()), 0.005);
+  // The covariance is the filtered gain's: still about 1 m along the axis, symmetric positive definite.
+  EXPECT_GT(std::sqrt(e.dot(P.block<3, 3>(sidx::kPos, sidx::kPos) * e)), 0.9);
+  EXPECT_LT(std::sqrt(P(sidx::kPos + 2, sidx::kPos + 2)), 0.05);
+  EXPECT_GT(P.ldlt().vectorD().minCoeff(), 0.0);
+
+  // A round prior (1 cm everywhere, position and velocity independent): the plain update, the same
+  // floor correction, the axis left alone because nothing links it to z.
+  StateCov P1 = initialCovariance();
+  P1.block<3, 3>(sidx::kRot, sidx::kRot) = Mat3::Identity() * 1e-6;
+  P1.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 0.05 * 0.05;
+  NavState x1 = x0;
+  lidarUpdate(x1, P1, body, map, cfg);
+  EXPECT_LT(std::abs(x1.p_world_imu.z() - truth.p_world_imu.z()), 0.005);
+  EXPECT_LT(std::abs(x1.p_world_imu.x() - x0.p_world_imu.x()), 0.005);
+  // No information along the axis: its variance is the prior's.
+  EXPECT_NEAR(P1(sidx::kPos, sidx::kPos), 0.05 * 0.05, 1e-6);
+}
+
 TEST(Degeneracy, SigmaMinOfPlaneFamilies) {
   // Three orthogonal families, equally represented: all eigenvalues equal -> 1/sqrt(3).
   std::vector<Vec3> n;

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <limits>
 
 namespace livo {
 
@@ -92,24 +93,66 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
 }
 
 /// Translation directions whose share sqrt(lambda / trace) of the matched planes' weighted normal
-/// scatter (the position block of H^T R^-1 H) is below kMinShare get no information: there the few
-/// matches off the dominant planes mostly carry the planes' own fitting error (a map of one scan, a
-/// corridor's walls), whose bias would move the position and, through the prior, the velocity.
+/// scatter (the position block of H^T R^-1 H) is below kMinShare are free: there the few matches off
+/// the dominant planes mostly carry the planes' own fitting error (a map of one scan, a corridor's
+/// walls), whose bias would move the position and, through the prior, the velocity.
 constexpr double kMinShare = 0.1;
 
-void projectFreeDirections(Mat66& HtRH, Vec66& HtRz) {
+/// The free translation directions of one iteration: the projector onto the constrained ones and
+/// whether the prior is too wide along a free one for its correlations to be trusted (below).
+struct FreeDirections {
+  Mat3 Pc = Mat3::Identity();  ///< projector onto the constrained translation directions
+  bool lever = false;          ///< keep the correction off the free directions (freeDirectionFilter)
+  bool any() const { return !Pc.isIdentity(0.0); }
+};
+
+/// The free directions of H^T R^-1 H, judged against the prior position covariance `Pp`. A free
+/// direction is known only to within the directions whose share is as low, an angle of about
+/// kMinShare: the prior's correlations carry information of the constrained directions into it with a
+/// lever sigma_free / sigma_constrained, which a misalignment within that angle makes wrong once the
+/// lever exceeds 1 / kMinShare (a start's or a long wall's wide prior along the axis: a centimetre of
+/// floor information moved a corridor start 3.4 m). Below it (a few frames facing one wall mid-run,
+/// the prior still round) the correlations are the IMU's and stand.
+FreeDirections freeDirections(const Mat66& HtRH, const Mat3& Pp) {
+  FreeDirections f;
   const Mat3 M = HtRH.bottomRightCorner<3, 3>();
   const double tr = M.trace();
-  if (!(tr > 0)) return;
+  if (!(tr > 0)) return f;
   const Eigen::SelfAdjointEigenSolver<Mat3> es(M / tr);
-  Mat3 Pc = Mat3::Identity();
-  bool any = false;
-  for (int k = 0; k < 3; ++k)
+  double var_free = 0.0, var_constrained = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 u = es.eigenvectors().col(k);
+    const double var = u.dot(Pp * u);
     if (std::sqrt(std::max(0.0, es.eigenvalues()(k))) < kMinShare) {
-      Pc -= es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose();
-      any = true;
+      f.Pc -= u * u.transpose();
+      var_free = std::max(var_free, var);
+    } else {
+      var_constrained = std::min(var_constrained, var);
     }
-  if (!any) return;
+  }
+  f.lever = f.any() && var_free * kMinShare * kMinShare > var_constrained;
+  return f;
+}
+
+/// The gain's filter where the lever is too long: identity except the position and velocity blocks,
+/// both the projector onto the constrained directions, so that the update neither measures nor moves
+/// them along the free ones.
+StateCov freeDirectionFilter(const Mat3& Pc) {
+  StateCov G = StateCov::Identity();
+  G.block<3, 3>(sidx::kPos, sidx::kPos) = Pc;
+  G.block<3, 3>(sidx::kVel, sidx::kVel) = Pc;
+  return G;
+}
+
+using Gain = Eigen::Matrix<double, kStateDim, 6>;
+
+/// The gain K_bar[:, 0:6], filtered where the free directions' lever is too long.
+Gain filteredGain(const StateCov& K_bar, const FreeDirections& f) {
+  if (!f.lever) return K_bar.leftCols<6>();
+  return freeDirectionFilter(f.Pc) * K_bar.leftCols<6>();
+}
+
+void projectTranslation(const Mat3& Pc, Mat66& HtRH, Vec66& HtRz) {
   Mat66 T = Mat66::Identity();
   T.bottomRightCorner<3, 3>() = Pc;
   HtRH = T * HtRH * T;
@@ -138,6 +181,9 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
   std::vector<CachedAssociation> assoc(points.size());
   std::vector<BlockSums> blocks((points.size() + kAssociationBlock - 1) / kAssociationBlock);
   StateCov K_bar = StateCov::Zero();
+  const Mat3 Pp_prop = P_prop.block<3, 3>(sidx::kPos, sidx::kPos);
+  FreeDirections free;         // the last iteration's free translation directions
+  Mat66 S = Mat66::Zero();     // and its projected H^T R^-1 H
   int converged_count = 0;
   for (int it = 0; it < cfg.max_iterations; ++it) {
     // 1. Associate every point with its most probable plane at the current estimate (blocks in
@@ -175,14 +221,16 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
 
     // 3. Information-form IEKF step: K_bar = (H^T R^-1 H + P^-1)^-1,
     //    delta = -K_bar H^T R^-1 z + Delta - K_bar H^T R^-1 H Delta[0:6], Delta = x_prop [-] x.
-    projectFreeDirections(HtRH, HtRz);
+    free = freeDirections(HtRH, Pp_prop);
+    if (free.any()) projectTranslation(free.Pc, HtRH, HtRz);
+    S = HtRH;
     StateCov info = P_prop_inv;
     info.topLeftCorner<6, 6>() += HtRH;
     K_bar = info.ldlt().solve(StateCov::Identity());
     const StateVec Delta = x_prop.boxminus(x);
     StateVec g = StateVec::Zero();
     g.head<6>() = HtRz + HtRH * Delta.head<6>();
-    const StateVec delta = Delta - K_bar * g;
+    const StateVec delta = Delta - filteredGain(K_bar, free) * g.head<6>();
     x = x.boxplus(delta);
 
     // 4. Convergence: two converged iterations, or one at the second-to-last allowed iteration, end the
@@ -195,9 +243,19 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
       break;
     }
   }
-  // 5. Covariance update once: P = (I - K_bar H^T R^-1 H) P_prop, which equals K_bar itself
-  //    (K_bar (P^-1 + H^T R^-1 H) = I), evaluated at the last linearisation point.
-  P = 0.5 * (K_bar + K_bar.transpose());
+  // 5. Covariance update once, evaluated at the last linearisation point: P = K_bar =
+  //    (I - K_bar H^T R^-1 H) P_prop. Where the gain was filtered (free directions with a long lever),
+  //    P is the Joseph form's for that gain L: P = (I - L S E) P_prop (I - L S E)^T + L S L^T, with
+  //    S the projected H^T R^-1 H and E selecting the pose block.
+  if (!free.lever) {
+    P = 0.5 * (K_bar + K_bar.transpose());
+  } else {
+    const Gain L = filteredGain(K_bar, free);
+    StateCov A = StateCov::Identity();
+    A.leftCols<6>() -= L * S;
+    const StateCov Pj = A * P_prop * A.transpose() + L * S * L.transpose();
+    P = 0.5 * (Pj + Pj.transpose());
+  }
   return res;
 }
 
