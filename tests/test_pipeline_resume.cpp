@@ -156,9 +156,11 @@ TEST(PipelineResume, AcrossAnOutageTheImuBridgesIt) {
             << " cm (uninterrupted " << eu.ate.translation_m.rmse * 100 << " cm), at most "
             << worstApart(tail) * 100 << " cm from the uninterrupted poses; without the samples "
             << worstApart(blind) * 100 << " cm\n";
-  // Measured 2026-12-06: 221 samples, ATE 0.237 cm (uninterrupted 0.267 cm), at most 0.94 cm from the
-  // uninterrupted poses; without the samples 18 m (the filter diverges). Bound on the distance about twice it.
+  // Measured 2026-12-07 (the LiDAR update's free-direction gain, e1fb8b1): 221 samples, ATE 0.184 cm
+  // (uninterrupted 0.383 cm; 0.568 and 0.439 cm before it), at most 2.20 cm from the uninterrupted
+  // poses (1.03 cm before: both runs moved, each closer to the truth); without the samples 18 m (the
+  // filter diverges). Bound on the distance about twice it.
   EXPECT_LE(e.ate.translation_m.rmse, 1.5 * eu.ate.translation_m.rmse);
-  EXPECT_LE(worstApart(tail), 0.02) << "no jump beyond the IMU's drift over the outage";
+  EXPECT_LE(worstApart(tail), 0.045) << "no jump beyond the IMU's drift over the outage";
   EXPECT_GT(worstApart(blind), 10 * worstApart(tail)) << "the outage's samples are what bridges it";
 }

@@ -128,7 +128,7 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
   // scans before they do): there the scan seeds the map at the predicted pose, its points' covariance
   // carrying the pose's uncertainty, and the frame is no LiDAR failure.
   if (r.lio.points.empty()) return;
-  if (lio_.mapStarted() && !r.lio.lio_ok) {
+  if (lio_.mapStarted() && !r.lio.lio_ok && !lio_.seedingMap()) {
     if (map.holdsAround(r.lio, cfg_.lio.min_matches)) return;
     r.map_seeded = true;
   }

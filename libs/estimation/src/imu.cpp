@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
 
 namespace livo {
 
@@ -19,6 +20,10 @@ void ImuConfig::load(const ConfigNode& n, double imu_rate_hz) {
   n.check(!n.has("init_max_samples"), "init_max_samples",
           "was removed (issue #13): without a static window the estimator initialises from motion after "
           "init_static_wait_s seconds; replace it with init_static_wait_s");
+  std::string start = start_filter ? "filter" : "rules";
+  n.get("start", start);
+  n.check(start == "rules" || start == "filter", "start", "must be rules or filter, got " + start);
+  start_filter = start == "filter";
   n.get("init_gyro_bias_sigma_rad_s", init_gyro_bias_sigma_rad_s).get("init_accel_bias_sigma_mps2", init_accel_bias_sigma_mps2);
   // Densities: positive (a zero density makes every covariance singular) and below values no real
   // IMU has (units: the key's; a typo of the unit, e.g. deg for rad, lands there).

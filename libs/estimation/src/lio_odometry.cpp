@@ -30,6 +30,17 @@ LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(
 }
 
 LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
+  if (cfg_.imu.start_filter) {
+    for (const auto& s : frame.imu) {
+      if (s.utime <= last_imu_fed_) continue;
+      last_imu_fed_ = s.utime;
+      init_.add(s);
+    }
+    motion_.reset();
+    const double window_s = double(cfg_.imu.init_samples - 1) / cfg_.imu.rate_hz;
+    const bool window = init_.firstSampleTime() >= 0 && toSeconds(last_imu_fed_ - init_.firstSampleTime()) >= window_s;
+    return window && initCoarse(frame) ? InitStep::Coarse : InitStep::Waiting;
+  }
   for (const auto& s : frame.imu) {
     if (s.utime <= last_imu_fed_) continue;
     last_imu_fed_ = s.utime;
@@ -69,6 +80,10 @@ LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
 
 namespace {
 
+/// The longest a scan is joined for (no LiDAR in use turns slower than 5 Hz; frames without a finite
+/// azimuth never revisit).
+constexpr double kMaxScanSeconds = 1.0;
+
 /// 10-degree azimuth cells (about the LiDAR's z axis) that the sweep's points fall in.
 std::bitset<36> azimuthCells(const LidarScan& sweep) {
   std::bitset<36> cells;
@@ -88,9 +103,7 @@ const Frame* LioOdometry::completeScan(const Frame& frame) {
   // few directions: the motion initialiser registers whole scans. Consecutive frames are joined until
   // the next one comes back to directions the joined ones already cover (more than half of its cells):
   // one revolution of a spinning LiDAR, one frame of a Livox (every frame covers the whole field of view).
-  // A joined scan longer than kMaxScanSeconds is handed over whatever it covers (no LiDAR in use turns
-  // slower than 5 Hz; frames without a finite azimuth never revisit).
-  constexpr double kMaxScanSeconds = 1.0;
+  // A joined scan longer than kMaxScanSeconds is handed over whatever it covers.
   const std::bitset<36> cells = azimuthCells(frame.sweep);
   const bool first = !pending_scan_.has_value();
   const bool revisits = !first && 2 * (cells & pending_cells_).count() > cells.count();
@@ -232,7 +245,7 @@ std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
     world.push_back(pw);
   }
   if (!pts.empty()) {
-    r.map_started = !map_started_;
+    r.map_started = !map_started_ || seeding_;
     if (!map_started_ && free_gravity_) {
       mapFrameFromFirstScan();
       r.P = filter_.P();
@@ -255,6 +268,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
     initialized_ = true;
     pending_scan_.reset();
     complete_scan_.reset();
+    seeding_ = !map_started_ || step == InitStep::InMotion;
     if (step == InitStep::InMotion) {
       // The motion initialiser's state is at the end of the last whole scan, before this frame (a scan
       // is known whole when the next frame arrives): this frame is propagated and registered as any
@@ -283,6 +297,18 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   // 1c. Undistort + downsample the sweep, with per-point covariances.
   r.points = prepareScan(frame.sweep, trace, cfg_.T_imu_lidar, cfg_.lio);
   r.n_points = static_cast<int>(r.points.size());
+  // The map starts from a whole scan (the start's rule for its fixes, completeScan): a frame cut at an
+  // image time holds a wedge of a spinning LiDAR's revolution, and a map of one wedge constrains the
+  // next in few directions, each from a few planes (a second frame moved 0.6 m and 3.5 deg from 39
+  // matches). Until a frame comes back to directions the map's frames already cover, it is inserted
+  // at its predicted pose (its points' covariance carrying the pose's uncertainty) without an update.
+  if (seeding_ && !frame.sweep.points.empty()) {
+    const std::bitset<36> cells = azimuthCells(frame.sweep);
+    const bool revisits = seed_cells_.any() && 2 * (cells & seed_cells_).count() > cells.count();
+    if (seed_cells_.none()) seed_start_ = frame.utime;
+    if (revisits || toSeconds(frame.utime - seed_start_) > kMaxScanSeconds) seeding_ = false;
+    else seed_cells_ |= cells;
+  }
   recordState(r);  // the prediction until update()
   r.lio_ms = watch.elapsedMs();
   return true;
@@ -291,7 +317,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
 void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool) {
   Stopwatch watch;
   // 3. Iterated point-to-plane update against the map (skipped until the map has content).
-  if (map_started_ && !r.points.empty()) {
+  if (map_started_ && !seeding_ && !r.points.empty()) {
     NavState x = filter_.x();
     StateCov P = filter_.P();
     const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio, pool);

@@ -38,6 +38,9 @@ struct ImuConfig {
   /// from the mean specific force of the last second, velocity from the LiDAR fixes or 0, both with wide
   /// sigmas) and lets the filter converge. At least init_static_wait_s plus one static window.
   double init_deadline_s = 1.5;
+  /// imu.start: "rules" (a static window the LiDAR confirms, the motion initialiser, the deadline's coarse
+  /// start) or "filter" (the coarse start once one window of samples is in: the filter's updates decide).
+  bool start_filter = false;
   double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of a gyro bias no static window observed
   double init_accel_bias_sigma_mps2 = 0.02;   ///< prior sigma of the accelerometer bias (never observed at start)
 

@@ -88,6 +88,8 @@ class LioOdometry {
   bool resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source);
   /// True once a scan went into the map (update() runs from then on).
   bool mapStarted() const { return map_started_; }
+  /// The frame being processed belongs to the map's first whole scan: inserted, not registered.
+  bool seedingMap() const { return seeding_; }
   const LioOdometryConfig& config() const { return cfg_; }
   bool initialized() const { return initialized_; }
   /// How the IMU was initialised (after initialized()), or what it waits for.
@@ -127,6 +129,11 @@ class LioOdometry {
   Utime last_imu_fed_ = -1;
   void mapFrameFromFirstScan();
   bool map_started_ = false;
+  /// The map's first whole scan is still being gathered: frames are inserted without an update
+  /// (seedCovers), their azimuth cells so far.
+  bool seeding_ = false;
+  std::bitset<36> seed_cells_;
+  Utime seed_start_ = 0;
   bool free_gravity_ = false;  ///< a coarse start where the LiDAR constrains every direction
   std::string init_message_;
 };
