@@ -48,7 +48,6 @@ FramePipeline::FramePipeline(PipelineConfig cfg)
 FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   Stopwatch watch;
   FrameResult r;
-  ++frames_;
   Image scratch;
   const Image* gray = frameImage(frame, scratch, r);
   // 1. Initialisation, propagation, undistortion, downsampling (nothing to estimate before the IMU

@@ -137,10 +137,8 @@ PoseGraphReport PoseGraph::optimize() {
     for (auto& l : losses) l->Reset(new ceres::CauchyLoss(scales[k]), ceres::TAKE_OWNERSHIP);
     ceres::Solve(opt, &problem, &summary);
     rep.iterations += static_cast<int>(summary.iterations.size());
-    if (k == 0) rep.initial_cost = summary.initial_cost;
     if (!summary.IsSolutionUsable()) break;
   }
-  rep.final_cost = summary.final_cost;
   rep.solved = summary.IsSolutionUsable();
   if (!rep.solved) {
     rep.message = summary.BriefReport();

@@ -76,7 +76,6 @@ RelocaliseStep Relocaliser::add(Utime t, const Pose& T_odom_body, const std::fun
   if (!try_now) return st;
   frames_since_attempt_ = 0;
   Stopwatch watch;
-  st.attempted = true;
   ++attempts_;
   const Pose K = keyframeFrame(T_odom_body);
   const Pose K_inv = K.inverse();

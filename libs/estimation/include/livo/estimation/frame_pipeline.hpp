@@ -52,7 +52,6 @@ class FramePipeline {
   const LioOdometry& odometry() const { return lio_; }
   /// The filter's state after the last frame (its snapshot() is what a restarted estimator resumes from).
   const Esikf& filter() const { return filter_; }
-  std::size_t framesProcessed() const { return frames_; }
   /// Frame images whose size does not match the camera calibration (never used by the visual update).
   std::size_t imagesWrongSize() const { return image_counters_.wrong_size; }
   /// Camera failures per kind (image_check.hpp): images never used by the visual update.
@@ -79,7 +78,6 @@ class FramePipeline {
   ImageCheck image_check_;
   VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
-  std::size_t frames_ = 0;
   std::size_t time_offset_resets_ = 0;
 };
 

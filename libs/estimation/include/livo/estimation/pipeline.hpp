@@ -36,20 +36,15 @@ class Pipeline {
   const LioOdometry& odometry() const { return frames_.odometry(); }
   /// The camera model at the processing scale (null without a camera).
   const CameraModel* camera() const { return frames_.camera(); }
-  /// The local visual map (hybrid mode) or the only one (global mode).
-  const VisualMap& visualMap() const { return map_->visual().local(); }
   /// The whole map: LiDAR map, local and long-term visual maps, counters.
   const HybridMap& map() const { return *map_; }
-  /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json
-  /// map {local_voxels, visual_points_local, visual_points_longterm, bytes}.
   /// Points of a prior map (a site map's keyframes near the robot, in the odometry frame) into the LiDAR
   /// map, between frames: their planes serve the next frames' LiDAR updates.
   void insertPriorPoints(const std::vector<PointWithCov>& points);
+  /// Exact sizes and bytes of every map structure (walks them all: call at stats rate). For stats.json
+  /// map {local_voxels, visual_points_local, visual_points_longterm, bytes}.
   HybridMapStats mapStats() const { return map_->stats(); }
-  /// Frame images whose size does not match the camera calibration (never used by the visual update).
-  std::size_t imagesWrongSize() const { return frames_.imagesWrongSize(); }
   const PipelineConfig& config() const { return frames_.config(); }
-  std::size_t framesProcessed() const { return frames_.framesProcessed(); }
 
  private:
   Recombiner recombiner_;

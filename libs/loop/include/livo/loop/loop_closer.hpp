@@ -102,7 +102,6 @@ class LoopCloser {
   int loopsAccepted() const { return graph_.loops(); }
   /// Keyframe points held (in memory or spilled) and the bytes of those in memory and on disk.
   std::size_t pointsHeld() const { return points_held_; }
-  std::size_t pointBytes() const { return store_.memoryBytes(); }
   std::size_t spilledBytes() const { return store_.spilledBytes(); }
   const LoopTotals& totals() const { return totals_; }
   /// The loop_* counters (stats.json) and the one-line summary of livo-run --loop and livo-loop.

@@ -39,8 +39,6 @@ struct PoseGraphEdge {
 struct PoseGraphReport {
   bool solved = false;
   int iterations = 0;
-  double initial_cost = 0.0;  ///< of the first solve (the widest loop loss)
-  double final_cost = 0.0;    ///< of the last (the configured loss)
   std::string message;  ///< Ceres' summary line when not solved
 };
 

@@ -21,7 +21,6 @@
 namespace livo {
 
 struct RelocaliseStep {
-  bool attempted = false;     ///< the map was searched with this frame
   bool localised_now = false; ///< this frame localised for the first time
   bool back_in_map = false;   ///< this frame matched the map again after left_map
   bool matched = false;       ///< a map keyframe was verified (an anchor)
