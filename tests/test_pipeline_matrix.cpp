@@ -66,10 +66,10 @@ TEST_P(RandomRig, StartsEarlyHoldsAndStaysAccurate) {
 // 699 s for the nine rigs of the previous subset (seeds 1-7, 28, 33 of the previous distribution).
 // Not in the subset because today's start fails it: a CAR moving from the first sample. Seeds 5 and 70
 // (streets; spinning32 at 5 Hz with a 15 Hz camera, Mid-360 at 5 Hz with a 15 Hz camera) give 16.8 m and
-// 36.7 m ATE over 12 s on main (2026-12-07; 16.2 and 50.4 m in the morning): seed 5's IMU window looks
-// static at constant speed and the street constrains its fixes along the road too little to refute the
-// rest. Seed 76 (spinning32 at 10 Hz) passes (0.26 m over 65 m) but not by a margin: variants of the start
-// gave it 0.5-21 m. The moving-start class is held here by a drone in a room (seed 47).
+// 42.8 m ATE over 12 s on main (2026-12-07 c779587; 36.7 m before the free-direction gain and the whole-scan
+// map start, 16.2 and 50.4 m in the morning): seed 5's IMU window looks static at constant speed and the
+// street constrains its fixes along the road too little to refute the rest. Seed 76 (spinning32 at 10 Hz)
+// passes (4.8 cm over 65 m; 0.26 m before) but not by a margin: variants of the start gave it 0.5-21 m. The moving-start class is held here by a drone in a room (seed 47).
 INSTANTIATE_TEST_SUITE_P(
     Matrix, RandomRig,
     ::testing::Values(
