@@ -74,6 +74,19 @@ std::vector<Vec3> boxScene(std::mt19937& rng, int per_face) {
   return pts;
 }
 
+// World points `scene` with Gaussian noise and covariance 2.5e-5 * I (5 mm), as a map's input.
+std::vector<PointWithCov> noisyMapPoints(const std::vector<Vec3>& scene, std::mt19937& rng,
+                                         std::normal_distribution<double>& noise) {
+  std::vector<PointWithCov> mpts;
+  for (const auto& p : scene) {
+    PointWithCov pw;
+    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
+    pw.cov_world = Mat3::Identity() * 2.5e-5;
+    mpts.push_back(pw);
+  }
+  return mpts;
+}
+
 // Body points of world points `scene` seen from `truth`, with Gaussian noise and covariance var * I.
 std::vector<BodyPoint> scanFrom(const NavState& truth, const std::vector<Vec3>& scene, std::mt19937& rng,
                                 std::normal_distribution<double>& noise, double var) {
@@ -94,14 +107,7 @@ TEST(LioUpdate, RecoversPerturbedPoseInBoxScene) {
   std::normal_distribution<double> noise(0, 0.005);
   VoxelMapConfig mc;
   VoxelMap map(mc);
-  const auto scene = boxScene(rng, 20000);
-  std::vector<PointWithCov> mpts;
-  for (const auto& p : scene) {
-    PointWithCov pw;
-    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
-    pw.cov_world = Mat3::Identity() * 2.5e-5;
-    mpts.push_back(pw);
-  }
+  const std::vector<PointWithCov> mpts = noisyMapPoints(boxScene(rng, 20000), rng, noise);
   map.insert(mpts);
   ASSERT_GT(map.numPlanes(), 100u);
 
@@ -134,13 +140,7 @@ TEST(LioUpdate, SamePosteriorToTheBitForEveryThreadCount) {
   std::mt19937 rng(16);
   std::normal_distribution<double> noise(0, 0.005);
   VoxelMap map(VoxelMapConfig{});
-  std::vector<PointWithCov> mpts;
-  for (const auto& p : boxScene(rng, 10000)) {
-    PointWithCov pw;
-    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
-    pw.cov_world = Mat3::Identity() * 2.5e-5;
-    mpts.push_back(pw);
-  }
+  const std::vector<PointWithCov> mpts = noisyMapPoints(boxScene(rng, 10000), rng, noise);
   map.insert(mpts);
   NavState truth;
   truth.R_world_imu = expSO3(Vec3(0.02, 0.04, -0.3));
@@ -258,13 +258,7 @@ TEST(LioUpdate, FreeDirectionNotMovedThroughAWidePriorsCorrelation) {
   std::mt19937 rng(23);
   std::normal_distribution<double> noise(0, 0.005);
   VoxelMap map(VoxelMapConfig{});
-  std::vector<PointWithCov> mpts;
-  for (const auto& p : corridorScene(rng, 8000)) {
-    PointWithCov pw;
-    pw.p_world = p + Vec3(noise(rng), noise(rng), noise(rng));
-    pw.cov_world = Mat3::Identity() * 2.5e-5;
-    mpts.push_back(pw);
-  }
+  const std::vector<PointWithCov> mpts = noisyMapPoints(corridorScene(rng, 8000), rng, noise);
   map.insert(mpts);
   NavState truth;
   truth.p_world_imu = Vec3(0.0, 0.2, 1.2);

@@ -30,21 +30,17 @@ LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(
 }
 
 LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
-  if (cfg_.imu.start_filter) {
-    for (const auto& s : frame.imu) {
-      if (s.utime <= last_imu_fed_) continue;
-      last_imu_fed_ = s.utime;
-      init_.add(s);
-    }
+  for (const auto& s : frame.imu) {
+    if (s.utime <= last_imu_fed_) continue;
+    last_imu_fed_ = s.utime;
+    // The rest of the frame's samples are propagated below (imu.start: filter takes them all).
+    if (init_.add(s) && !cfg_.imu.start_filter) break;
+  }
+  if (cfg_.imu.start_filter) {  // the coarse start once one window of samples is in
     motion_.reset();
     const double window_s = double(cfg_.imu.init_samples - 1) / cfg_.imu.rate_hz;
     const bool window = init_.firstSampleTime() >= 0 && toSeconds(last_imu_fed_ - init_.firstSampleTime()) >= window_s;
     return window && initCoarse(frame) ? InitStep::Coarse : InitStep::Waiting;
-  }
-  for (const auto& s : frame.imu) {
-    if (s.utime <= last_imu_fed_) continue;
-    last_imu_fed_ = s.utime;
-    if (init_.add(s)) break;  // the rest of the frame's samples are propagated below
   }
   // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
   const Frame* scan = completeScan(frame);
@@ -95,6 +91,11 @@ std::bitset<36> azimuthCells(const LidarScan& sweep) {
   return cells;
 }
 
+/// A frame comes back to directions already covered: more than half of its cells are among them.
+bool revisits(const std::bitset<36>& cells, const std::bitset<36>& covered) {
+  return 2 * (cells & covered).count() > cells.count();
+}
+
 }  // namespace
 
 const Frame* LioOdometry::completeScan(const Frame& frame) {
@@ -106,9 +107,9 @@ const Frame* LioOdometry::completeScan(const Frame& frame) {
   // A joined scan longer than kMaxScanSeconds is handed over whatever it covers.
   const std::bitset<36> cells = azimuthCells(frame.sweep);
   const bool first = !pending_scan_.has_value();
-  const bool revisits = !first && 2 * (cells & pending_cells_).count() > cells.count();
+  const bool back = !first && revisits(cells, pending_cells_);
   const bool too_long = !first && toSeconds(frame.utime - pending_scan_->sweep.utime) > kMaxScanSeconds;
-  if (!first && !revisits && !too_long && !frame.sweep.points.empty()) {
+  if (!first && !back && !too_long && !frame.sweep.points.empty()) {
     Frame& p = *pending_scan_;
     const float shift = float(toSeconds(frame.sweep.utime - p.sweep.utime));
     for (LidarPoint pt : frame.sweep.points) {
@@ -304,9 +305,9 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   // at its predicted pose (its points' covariance carrying the pose's uncertainty) without an update.
   if (seeding_ && !frame.sweep.points.empty()) {
     const std::bitset<36> cells = azimuthCells(frame.sweep);
-    const bool revisits = seed_cells_.any() && 2 * (cells & seed_cells_).count() > cells.count();
+    const bool back = seed_cells_.any() && revisits(cells, seed_cells_);
     if (seed_cells_.none()) seed_start_ = frame.utime;
-    if (revisits || toSeconds(frame.utime - seed_start_) > kMaxScanSeconds) seeding_ = false;
+    if (back || toSeconds(frame.utime - seed_start_) > kMaxScanSeconds) seeding_ = false;
     else seed_cells_ |= cells;
   }
   recordState(r);  // the prediction until update()

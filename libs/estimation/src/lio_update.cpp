@@ -102,7 +102,7 @@ constexpr double kMinShare = 0.1;
 /// whether the prior is too wide along a free one for its correlations to be trusted (below).
 struct FreeDirections {
   Mat3 Pc = Mat3::Identity();  ///< projector onto the constrained translation directions
-  bool lever = false;          ///< keep the correction off the free directions (freeDirectionFilter)
+  bool lever = false;          ///< keep the correction off the free directions (filteredGain)
   bool any() const { return !Pc.isIdentity(0.0); }
 };
 
@@ -134,22 +134,18 @@ FreeDirections freeDirections(const Mat66& HtRH, const Mat3& Pp) {
   return f;
 }
 
-/// The gain's filter where the lever is too long: identity except the position and velocity blocks,
-/// both the projector onto the constrained directions, so that the update neither measures nor moves
-/// them along the free ones.
-StateCov freeDirectionFilter(const Mat3& Pc) {
-  StateCov G = StateCov::Identity();
-  G.block<3, 3>(sidx::kPos, sidx::kPos) = Pc;
-  G.block<3, 3>(sidx::kVel, sidx::kVel) = Pc;
-  return G;
-}
-
 using Gain = Eigen::Matrix<double, kStateDim, 6>;
 
-/// The gain K_bar[:, 0:6], filtered where the free directions' lever is too long.
+/// The gain K_bar[:, 0:6]; where the free directions' lever is too long, its position and velocity
+/// rows projected onto the constrained directions, so that the update neither measures nor moves them
+/// along the free ones.
 Gain filteredGain(const StateCov& K_bar, const FreeDirections& f) {
-  if (!f.lever) return K_bar.leftCols<6>();
-  return freeDirectionFilter(f.Pc) * K_bar.leftCols<6>();
+  Gain L = K_bar.leftCols<6>();
+  if (f.lever) {
+    L.middleRows<3>(sidx::kPos) = f.Pc * L.middleRows<3>(sidx::kPos);
+    L.middleRows<3>(sidx::kVel) = f.Pc * L.middleRows<3>(sidx::kVel);
+  }
+  return L;
 }
 
 void projectTranslation(const Mat3& Pc, Mat66& HtRH, Vec66& HtRz) {

@@ -130,7 +130,7 @@ class LioOdometry {
   void mapFrameFromFirstScan();
   bool map_started_ = false;
   /// The map's first whole scan is still being gathered: frames are inserted without an update
-  /// (seedCovers), their azimuth cells so far.
+  /// (completeScan's rule: until a frame revisits the cells covered so far, at most 1 s).
   bool seeding_ = false;
   std::bitset<36> seed_cells_;
   Utime seed_start_ = 0;
