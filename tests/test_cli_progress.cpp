@@ -188,7 +188,7 @@ TEST(ProgressOfTheBinaries, DrawnIntoFilesWithProgressOnlyAndReachingTheEnd) {
   // Messages while the line is drawn get lines of their own (the initialisation message): the line is
   // blanked, the message printed and ended, the line drawn again.
   const std::string all = slurp(d + "/run.txt");
-  const auto init = all.find("\rlivo-run: IMU initialised");
+  const auto init = all.find("\rlivo-run: filter started from");
   ASSERT_NE(init, std::string::npos) << all;
   EXPECT_EQ(all.substr(all.find('\n', init) + 1, 11), "\rlivo-run: ") << all;
 

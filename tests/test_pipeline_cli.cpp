@@ -206,9 +206,10 @@ TEST(LivoRun, PrintedConfigGivesTheSameTrajectory) {
   fs::remove_all(dir);
 }
 
-// A run that produces no pose says why and fails: 1.2 s of a rig moving along a single wall (random rig
-// 1: no static window, LiDAR fixes that slide along the wall) ends before the 1.5 s initialisation
-// deadline. The same rig over 4 s starts at the deadline (coarse start) and stats.json's health says when.
+// A run that produces no pose says why and fails: 1.2 s of a rig whose config asks for a start window of
+// 1000 IMU samples (4 s or more at the generator's rates) ends before the filter can start. The same rig
+// with its own config (half a second of samples) over 4 s starts once that window is in, and stats.json's
+// health says when.
 TEST(LivoRun, NoPoseExitsOneNamingTheCauseAndHealthSaysWhenPosesStarted) {
   for (const char* b : {"livo-sim", "livo-run"})
     if (!fs::exists(bin(b))) LIVO_SKIP() << bin(b) << " not built";
@@ -221,29 +222,35 @@ TEST(LivoRun, NoPoseExitsOneNamingTheCauseAndHealthSaysWhenPosesStarted) {
     ASSERT_EQ(run(bin("livo-sim") + " --random 1 --duration " + seconds + " --out " + log + " --gt " +
                   (dir / "gt.tum").string() + " --rig " + rig + " --quiet"),
               0);
+    std::string config = rig;
+    if (std::string(seconds) == "1.2") {
+      std::string text = slurp(rig);
+      const std::size_t at = text.find("init_samples: ");
+      ASSERT_NE(at, std::string::npos) << text;
+      text.replace(at, text.find('\n', at) - at, "init_samples: 1000");
+      config = (dir / "long_window.yaml").string();
+      std::ofstream(config) << text;
+    }
     const fs::path out = dir / (std::string("out") + seconds);
-    const livo::test::Ran r = livo::test::runSplit(bin("livo-run") + " " + log + " --config " + rig + " --out " +
+    const livo::test::Ran r = livo::test::runSplit(bin("livo-run") + " " + log + " --config " + config + " --out " +
                                                        out.string() + " --no-maps --progress",
                                                    dir);
     const std::string stats = slurp(out / "stats.json");
     if (std::string(seconds) == "1.2") {
       EXPECT_EQ(r.rc, 1) << r.err;
       EXPECT_NE(r.err.find("livo-run: warning: no pose in"), std::string::npos) << r.err;
-      EXPECT_NE(r.err.find("no static window"), std::string::npos) << "names the missing condition: " << r.err;
+      EXPECT_NE(r.err.find("collecting the first 1000 IMU samples"), std::string::npos) << "names the missing condition: " << r.err;
       EXPECT_NE(r.err.find("livo-run: no pose yet, 1.0 s after the first frame"), std::string::npos) << r.err;
       EXPECT_NE(stats.find("\"no_pose_reason\": \"never initialised: "), std::string::npos) << stats;
       EXPECT_DOUBLE_EQ(livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s"), -1.0);
     } else {
       EXPECT_EQ(r.rc, 0) << r.err;
-      // How it started, said on stderr (rig 1 rests 0.09 s, then ramps up over 0.6 s: since 2026-12-07 its
-      // calm window is taken as rest, the fixes not refuting it along the directions the map constrains;
-      // before, the deadline's coarse start came).
-      EXPECT_TRUE(r.err.find("IMU initialised") != std::string::npos ||
-                  r.err.find("coarse start at the 1.5 s deadline") != std::string::npos)
-          << r.err;
+      EXPECT_NE(r.err.find("filter started from"), std::string::npos) << "how it started, said on stderr: " << r.err;
+      // The window is half a second of samples (livo-sim --rig); the delay counts from the first frame,
+      // which may come before or after the first IMU sample by up to a frame.
       const double delay = livo::test::jsonNumberAfter(stats, "\"health\"", "first_pose_delay_s");
-      EXPECT_GE(delay, 1.3);  // the deadline counts from the first IMU sample, the delay from the first frame
-      EXPECT_LE(delay, 1.7);
+      EXPECT_GE(delay, 0.3);
+      EXPECT_LE(delay, 0.8);
       EXPECT_LE(livo::test::jsonNumberAfter(stats, "\"health\"", "longest_pose_gap_s"), 0.11);
       EXPECT_EQ(stats.find("no_pose_reason"), std::string::npos);
     }

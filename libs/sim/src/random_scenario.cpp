@@ -138,7 +138,7 @@ RandomScenario drawRandomScenario(std::uint64_t seed, double duration_s) {
       max_accel = d.uniform(1.5, 4.0), sway = d.uniform(0.5, 3.0), bob = 0.0;
     }
   }
-  // Start: at rest long enough for a static window; briefly at rest; a fast start (under half a second
+  // Start: at rest for a while; briefly at rest; a fast start (under half a second
   // at rest, then up to cruise at the vehicle's acceleration limit: the quintic ramp's peak
   // acceleration is kRampPeak x cruise / ramp_s); or in motion at cruise from the first sample.
   constexpr double kRampPeak = 1.875;  // max of h'(x) = 30 x^2 (1 - x)^2 (trajectory.cpp)

@@ -30,7 +30,7 @@ std::string pose(const Pose& T) {
 
 void writeRigConfig(const SimScenario& sc, std::ostream& out) {
   const bool outdoor = sc.environmentOrDefault() == "outdoor";
-  // The static window follows the IMU alone (half a second of samples), never the scenario's rest: a
+  // The start's window follows the IMU alone (half a second of samples), never the scenario's rest: a
   // rig config knows its sensors, not how long the next run stands still.
   const int init_samples = std::clamp(static_cast<int>(std::lround(0.5 * sc.imu.rate_hz)), 20, 400);
   const std::string file = sc.source.substr(sc.source.find_last_of('/') + 1);
@@ -45,11 +45,8 @@ void writeRigConfig(const SimScenario& sc, std::ostream& out) {
       << "  gyro_bias_walk: " << num(sc.imu.gyro_bias_walk) << "\n"
       << "  accel_bias_walk: " << num(sc.imu.accel_bias_walk) << "\n"
       << "  time_offset_s: 0.0\n"
-      << "  init_samples: " << init_samples << "\n";
-  if (sc.imu.vibration.active())  // the rig's vibration at rest, 3-axis RMS (the static test's margin)
-    out << "  init_vibration_gyro_rad_s: " << num(std::sqrt(3.0) * sc.imu.vibration.gyro_rad_s) << "\n"
-        << "  init_vibration_accel_mps2: " << num(std::sqrt(3.0) * sc.imu.vibration.accel_mps2) << "\n";
-  out << "\n"
+      << "  init_samples: " << init_samples << "\n"
+      << "\n"
       << "lidar:\n"
       << "  model: " << sc.lidar.model << "\n"
       << "  T_imu_lidar: " << pose(sc.extrinsics.T_imu_lidar) << "\n"

@@ -20,42 +20,26 @@ struct ImuConfig {
   double gravity_m_s2 = 9.81;       ///< local gravity magnitude
   double rate_hz = 200.0;           ///< imu.rate_hz: nominal sample rate (the static test's noise per sample)
   bool gravity_align = true;        ///< rotate the world so that gravity is (0, 0, -g) (world z up)
-  // Initialisation (imu_init.hpp, lio_odometry.hpp):
-  int init_samples = 30;            ///< samples of the static window
-  /// A window is static when the RMS deviation of its gyro and accelerometer samples is below
-  /// init_static_factor times the RMS the configured white noise gives (sqrt(3) density sqrt(rate)
-  /// noise_scale per sensor) plus the rig's vibration at rest below.
-  double init_static_factor = 3.0;
-  double init_vibration_gyro_rad_s = 0.0;   ///< RMS gyro vibration of the rig at rest (rotors, engine; 3 axes together), rad/s
-  double init_vibration_accel_mps2 = 0.0;   ///< RMS accelerometer vibration at rest (3 axes together), m/s^2
-  double init_max_gyro_std = 0.0;   ///< rad/s: explicit static threshold replacing the derived one (0: derive)
-  double init_max_accel_std = 0.0;  ///< m/s^2: explicit static threshold (0: derive)
-  /// Without a static window this long after the first sample (at least one window), the odometry
-  /// initialises from motion (lio_odometry.hpp); the calmest static window seen is used otherwise.
-  double init_static_wait_s = 1.0;
-  /// The latest time (after the first sample) at which the odometry starts: not initialised by then
-  /// (no static window the LiDAR confirmed, no motion solution), it starts from a coarse state (gravity
-  /// from the mean specific force of the last second, velocity from the LiDAR fixes or 0, both with wide
-  /// sigmas) and lets the filter converge. At least init_static_wait_s plus one static window.
-  double init_deadline_s = 1.5;
-  /// imu.start: "rules" (a static window the LiDAR confirms, the motion initialiser, the deadline's coarse
-  /// start) or "filter" (the coarse start once one window of samples is in: the filter's updates decide).
-  bool start_filter = false;
-  double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of a gyro bias no static window observed
+  // The start (imu_init.hpp, lio_odometry.hpp):
+  /// The filter starts once the IMU samples span init_samples samples at rate_hz: gravity from their
+  /// mean specific force, whatever the rig does (no static test).
+  int init_samples = 30;
+  /// Prior sigma of the start's velocity (the start assumes none: v = 0). Set it to what the rig may be
+  /// doing when it starts (a car that starts on the move: its speed).
+  double init_speed_sigma_mps = 2.0;
+  double init_gyro_bias_sigma_rad_s = 0.02;   ///< prior sigma of the gyro bias at the start
   double init_accel_bias_sigma_mps2 = 0.02;   ///< prior sigma of the accelerometer bias (never observed at start)
 
   /// Reads the `imu` section (noise densities, initialisation); errors name the key. The rate,
   /// imu.rate_hz, is read and checked by the preprocessing's config (PreprocessConfig, loaded first by
   /// PipelineConfig) and given as `rate_hz`.
   void load(const ConfigNode& imu, double rate_hz);
-  /// Static-test thresholds: RMS deviation of a static window, gyro rad/s and accel m/s^2.
-  double staticGyroThreshold() const;
-  double staticAccelThreshold() const;
   /// White-noise sigma of one sample (density * noise_scale * sqrt(rate)).
   double gyroSampleSigma() const;
   double accelSampleSigma() const;
-  /// The deadline in effect: init_deadline_s, but never before a static window can be chosen.
-  double deadlineSeconds() const;
+  /// Keys of the removed start rules (static test, motion initialiser, deadline) found in the section:
+  /// read and ignored (load() keeps them out of the unknown-key error), named in the start's message.
+  std::vector<std::string> ignored_keys;
 };
 
 /// State at one IMU sample, with the unbiased rate and world acceleration used for the interval that

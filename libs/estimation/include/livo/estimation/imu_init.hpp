@@ -1,25 +1,21 @@
-// Static IMU initialisation that follows the sensor's configured noise (docs/algorithms.md section 1).
+// The start's IMU part (docs/algorithms.md section 1): the first window of samples gives gravity's
+// direction, the accelerometer's unit and a gyro bias guess, each with the uncertainty the window
+// leaves; the filter starts from them at once and its LiDAR updates pull velocity, gravity and biases in.
 //
-// Every full window of init_samples samples is tested: it is static when the RMS deviation of its
-// gyro samples is below ImuConfig::staticGyroThreshold() and that of its accelerometer samples (in
-// m/s^2) below staticAccelThreshold(); both derive from the configured noise densities and rate (a
-// documented factor, plus the rig's vibration margin), and its mean rate must be a plausible bias (at
-// most 5 init_gyro_bias_sigma_rad_s: a steady turn is calm too). Of the static windows seen, the calmest (the
-// smallest ratio of RMS deviation to threshold) is used, once the calm ends (a window in motion
-// follows) or init_static_wait_s after the first sample, whichever comes first. A window in motion is
-// never used: when none is static by then, noStaticWindow() says so and the odometry initialises
-// from motion (lio_odometry.hpp); later static windows are still taken if they come first. An IMU
-// cannot tell rest from constant velocity: the odometry confirms a chosen window with the LiDAR
-// (motion_init.hpp) and reject()s it when the rig moved. By ImuConfig::deadlineSeconds() after the first
-// sample the odometry starts whatever it has (lio_odometry.cpp): a chosen window the LiDAR could not
-// confirm, else coarseState() (the window, its wait and the rate can never keep the first pose out).
-//
-// The state is at the end of the chosen window: gyro bias = mean gyro, gravity from the mean
-// specific force (its norm also gives the accelerometer scale: g-unit IMUs), zero velocity. The
-// covariance says what was observed: the gyro bias to sigma_gyro / sqrt(n) per axis, roll and pitch
-// to sqrt(sigma_accel^2 / n + sigma_ba^2) / g (at rest a horizontal accelerometer bias looks like a
-// tilt); yaw and position are the world frame's definition; the accelerometer bias itself is not
-// observable at rest (its prior sigma_ba = init_accel_bias_sigma_mps2).
+// There is no static test: an IMU cannot tell rest from constant velocity, and a calm window at
+// a car's speed, a vibrating rotorcraft's rest and a walk differ only in the values the filter
+// estimates. Once the samples span one window (ImuConfig::init_samples at the configured rate):
+// - gravity: the mean specific force of the samples of the last second. It is off by the mean
+//   horizontal acceleration a_h over that second: a varying one shows in the samples' spread, a
+//   steady one lengthens the mean to sqrt(g^2 + a_h^2). The tilt sigma is
+//   atan2(max(RMS deviation, sqrt(| |mean|^2 - g^2 |)), g), clamped to [2, 15] degrees (a few tenths
+//   of m/s^2 hide in the noise and an IMU's scale error; in g units the norm is the scale: only the
+//   spread counts);
+// - accelerometer scale: g / |mean| when |mean| < 4 (an IMU in g units), else 1;
+// - gyro bias: the mean rate when it is a plausible bias (below 3 init_gyro_bias_sigma_rad_s), with
+//   that prior sigma either way (a slow turn looks the same);
+// - velocity 0 with sigma init_speed_sigma_mps; position the origin; accelerometer bias 0 with
+//   init_accel_bias_sigma_mps2; yaw defines the world.
 #pragma once
 
 #include "livo/estimation/imu.hpp"
@@ -27,67 +23,29 @@
 
 #include <deque>
 #include <string>
-#include <vector>
 
 namespace livo {
 
 class ImuInitializer {
  public:
   explicit ImuInitializer(const ImuConfig& cfg) : cfg_(cfg) {}
-  /// Adds a sample (time order; older or duplicate stamps are ignored). Returns done().
+  /// Adds a sample (time order; older or duplicate stamps are ignored). Returns ready().
   bool add(const ImuSample& s);
-  /// A static window was chosen: initialState() and friends are valid.
-  bool done() const { return done_; }
-  /// No static window within the wait: initialise from motion (static windows are still looked for).
-  bool noStaticWindow() const { return no_static_; }
-  /// Scale applied to every accelerometer reading: g / |mean accel| (about 9.81 for g-unit IMUs).
-  double accelScale() const { return accel_scale_; }
-  /// State at the end of the chosen window.
-  NavState initialState() const { return state_; }
-  /// Prior covariance from what the window observed (see the file comment).
-  StateCov initialCovariance() const;
-  /// The chosen window was not rest after all (the LiDAR saw the rig move: constant velocity looks
-  /// like rest to an IMU): forget it; noStaticWindow() from now on, later windows are still tested.
-  void reject();
-  /// Start time of the chosen window.
-  Utime windowStart() const { return best_.start; }
-  /// Samples after the chosen window (the odometry propagates the state through them).
-  std::vector<ImuSample> samplesAfterWindow() const;
+  /// The samples span one window (init_samples at rate_hz): start() can be called.
+  bool ready() const;
   /// Time of the first sample (-1 before any).
   Utime firstSampleTime() const { return first_utime_; }
-  std::string describe() const;
-  /// While not done(): which condition is missing, with the numbers (the last full window's RMS
-  /// deviations against the thresholds).
+  /// The start state at the last sample and its prior covariance (see the file comment);
+  /// `tilt_sigma_rad` and `accel_scale` for the message and the propagator. False without samples or
+  /// without a usable gravity (a mean specific force of zero or not finite).
+  bool start(NavState& x, StateCov& P, double& tilt_sigma_rad, double& accel_scale) const;
+  /// Before ready(): what is missing, with the numbers.
   std::string status() const;
-  /// A coarse state for a start without a static window or a motion solution (the deadline,
-  /// ImuConfig::deadlineSeconds()): gravity from the mean specific force of the last second of samples,
-  /// zero velocity, the gyro bias from the mean rate when it is a plausible bias; `P` the prior of
-  /// initialCovariance() with roll and pitch to `tilt_sigma_rad` (what that mean can be off by) and the
-  /// gyro bias to its prior sigma (the caller sets the velocity's). False without samples or gravity.
-  bool coarseState(NavState& x, StateCov& P, double& tilt_sigma_rad, double& accel_scale) const;
 
  private:
-  struct WindowStats {
-    Vec3 mean_gyro = Vec3::Zero(), mean_accel = Vec3::Zero();
-    double rms_gyro = 0, rms_accel = 0, scale = 1.0;
-    double score = 0;  ///< max(rms_gyro / gyro threshold, rms_accel / accel threshold); static below 1
-    Utime start = 0, end = 0;
-    int n = 0;
-  };
-  bool windowStats(WindowStats& w) const;  ///< the last init_samples samples; false without gravity
-  void choose(const WindowStats& w);
-  /// The start's prior: roll and pitch to var_tilt about the world's horizontal axes (R the start's
-  /// attitude; yaw defines the world), gyro bias var_bg, accelerometer bias its prior.
-  StateCov prior(const Mat3& R, double var_tilt, double var_bg) const;
-
   ImuConfig cfg_;
-  std::deque<ImuSample> samples_;  ///< since the first sample, bounded (see add())
+  std::deque<ImuSample> samples_;  ///< the last second (at least one window)
   Utime first_utime_ = -1;
-  bool have_best_ = false, done_ = false, no_static_ = false;
-  WindowStats best_;
-  WindowStats last_;  ///< the last full window (status())
-  double accel_scale_ = 1.0;
-  NavState state_;
 };
 
 }  // namespace livo

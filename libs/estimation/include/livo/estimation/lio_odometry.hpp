@@ -7,7 +7,6 @@
 #include "livo/estimation/esikf.hpp"
 #include "livo/estimation/imu.hpp"
 #include "livo/estimation/imu_init.hpp"
-#include "livo/estimation/motion_init.hpp"
 #include "livo/estimation/lio_update.hpp"
 #include "livo/map/plane_finder.hpp"
 #include "livo/map/point_cov.hpp"
@@ -23,7 +22,6 @@ namespace livo {
 
 struct LioOdometryConfig {
   ImuConfig imu;
-  MotionInitConfig motion_init;  ///< keys imu.init_motion_* (initialisation without a static window)
   LioConfig lio;
   VoxelMapConfig map;
   Pose T_imu_lidar = Pose::Identity();
@@ -65,7 +63,7 @@ class LioOdometry {
   LioOdometry(LioOdometryConfig cfg, Esikf& filter);
 
   // The LiDAR-inertial phases of a frame, in this order:
-  /// Step 1: initialisation (at rest: imu_init.hpp; else from motion: motion_init.hpp), propagation
+  /// Step 1: the start (the filter from the first window of IMU samples: imu_init.hpp), propagation
   /// to the frame time, undistortion and downsampling. Returns true when r.points wait for update()
   /// (r.state holds the prediction); false when there is nothing to estimate (IMU not initialised
   /// yet, frame inside the initialisation window).
@@ -75,9 +73,7 @@ class LioOdometry {
   void update(LioFrameResult& r, const PlaneFinder& planes, WorkerPool* pool = nullptr);
   /// Step 3's insertion: the frame's points in the world with their covariance at the filter's
   /// posterior, for the map. From then on the map holds a scan (update() runs from the next frame on).
-  /// The first scan defines the map frame: its points carry no pose covariance, and after a coarse
-  /// start in geometry that constrains every direction the attitude's tilt uncertainty moves to
-  /// gravity's direction in that frame (mapFrameFromFirstScan; r.P is updated).
+  /// The first scan defines the map frame: its points carry no pose covariance.
   std::vector<PointWithCov> scanForMap(LioFrameResult& r);
 
   /// Starts from another estimator's last state instead of initialising (a restart in the middle of a
@@ -98,21 +94,8 @@ class LioOdometry {
   std::string waitMessage() const;
 
  private:
-  enum class InitStep { Waiting, AtRest, InMotion, Coarse };
-  /// Feeds the frame to the static initialiser and the motion initialiser; sets x_, P_ and the
-  /// propagator when one of them is done.
-  InitStep initialise(const Frame& frame);
-  enum class Rest { Confirmed, Moved, Unknown, Unconfirmable };
-  /// Whether the LiDAR saw the rig at rest during the static window the IMU chose.
-  Rest confirmRest(const Frame& frame);
-  void initAtRest(const Frame& frame);
-  /// The deadline passed (ImuConfig::deadlineSeconds()): start from ImuInitializer::coarseState().
-  bool initCoarse(const Frame& frame);
-  /// Frames joined into whole scans for the motion initialiser: the joined frames when `frame` comes
-  /// back to directions they already cover (nullptr while they do not; see the .cpp).
-  const Frame* completeScan(const Frame& frame);
-  std::optional<Frame> pending_scan_, complete_scan_;
-  std::bitset<36> pending_cells_;
+  /// Feeds the frame's IMU samples to the start; starts the filter once they span one window.
+  bool initialise(const Frame& frame);
   /// x_ / P_ through the samples of `samples` after x_'s time and before this frame's own samples
   /// begin (the frame's propagation keeps its trace for the undistortion).
   void propagateUpToFrame(const std::vector<ImuSample>& samples, const Frame& frame);
@@ -122,19 +105,15 @@ class LioOdometry {
   LioOdometryConfig cfg_;
   Esikf& filter_;
   ImuInitializer init_;
-  std::unique_ptr<MotionInitializer> motion_;  ///< until initialised
   bool initialized_ = false;
-  int rest_rejections_ = 0;  ///< static IMU windows the LiDAR saw moving
   std::vector<ImuSample> resume_imu_;  ///< resume(): samples to propagate through before the next frame's
   Utime last_imu_fed_ = -1;
-  void mapFrameFromFirstScan();
   bool map_started_ = false;
   /// The map's first whole scan is still being gathered: frames are inserted without an update
-  /// (completeScan's rule: until a frame revisits the cells covered so far, at most 1 s).
+  /// (until a frame revisits the azimuth cells covered so far, at most 1 s).
   bool seeding_ = false;
   std::bitset<36> seed_cells_;
   Utime seed_start_ = 0;
-  bool free_gravity_ = false;  ///< a coarse start where the LiDAR constrains every direction
   std::string init_message_;
 };
 

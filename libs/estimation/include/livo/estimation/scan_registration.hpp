@@ -64,8 +64,8 @@
 //     room). The information of the pose is sum J^T w J over the final matches ([rotation, position],
 //     right perturbation), divided by the mean z^2 / var when that exceeds 1 (real surfaces are less
 //     flat than the planes' covariance says), with the unconstrained directions projected out.
-//     weakest_share is sqrt(lambda_min / trace) of M (degeneracySigmaMin and
-//     MotionInitializer::weakestShare with the residual weights), weakest_direction its eigenvector.
+//     weakest_share is sqrt(lambda_min / trace) of M (degeneracySigmaMin with the residual weights),
+//     weakest_direction its eigenvector.
 //
 // Thresholds come from the configured sensor noise and voxel map (from(LioConfig, VoxelMapConfig,
 // min_matches)); the other members are algorithm constants with defaults (no config keys).
@@ -118,7 +118,7 @@ struct ScanRegistrationConfig {
   int stage_iterations = 8;    ///< Gauss-Newton iterations per correspondence-distance stage
   double cauchy_c = 2.3849;    ///< Cauchy kernel width in sigmas (95 % efficiency on Gaussian noise)
   /// A translation direction whose share sqrt(lambda / trace) of the matched normals' scatter (weights
-  /// 1 / var) is below this is unconstrained (MotionInitializer::kConstrainedShare): not updated, no
+  /// 1 / var) is below this is unconstrained (the LiDAR update's kMinShare): not updated, no
   /// information.
   double min_share = 0.1;
   double min_inlier_share = 0.2;  ///< matched points at least this share of the refinement points

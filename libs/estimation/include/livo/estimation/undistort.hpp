@@ -16,7 +16,7 @@ namespace livo {
 std::vector<LidarPoint> undistortToEnd(const LidarScan& sweep, const std::vector<ImuTracePoint>& trace,
                                        const Pose& T_imu_lidar);
 
-/// Step 1c of a frame (frame_pipeline.hpp), for the odometry and the motion initialiser alike: the
+/// Step 1c of a frame (frame_pipeline.hpp): the
 /// sweep undistorted to the trace's end (undistortToEnd), voxel-downsampled at lio.downsample_m in the
 /// IMU frame, uniformly subsampled beyond lio.max_points, each point with its range/bearing covariance
 /// rotated into the IMU frame.
