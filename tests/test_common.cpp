@@ -123,7 +123,7 @@ TEST(Se3, PoseArrayRoundTrip) {
   const Pose T = poseFromArray(a);
   const auto b = poseToArray(T);
   for (int i = 0; i < 7; ++i) EXPECT_NEAR(a[i], b[i], 1e-12);
-  // Camera looking forward (DESIGN.md): optical axis z_cam = x_imu.
+  // Camera looking forward (the simulated rigs' nominal mounting): optical axis z_cam = x_imu.
   EXPECT_TRUE((T.linear() * Vec3::UnitZ()).isApprox(Vec3::UnitX()));
   const double zero[7] = {0, 0, 0, 0, 0, 0, 0};
   EXPECT_THROW(poseFromArray(zero), std::invalid_argument);

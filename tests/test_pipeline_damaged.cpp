@@ -126,7 +126,7 @@ TEST(Damaged, TruncatedLogStopsWithAClearErrorAndKeepsTheOutputs) {
   std::filesystem::copy_file(sim().log, path, std::filesystem::copy_options::overwrite_existing);
   std::filesystem::resize_file(path, std::filesystem::file_size(path) * 6 / 10 + 7);
   const RunResult r = runLivo(path, "truncated");
-  EXPECT_NE(r.rc, 0) << r.out;
+  EXPECT_EQ(r.rc, 1) << "a run-time error, not a crash (-1) or a usage error (2): " << r.out;
   EXPECT_NE(r.out.find("truncated"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("outputs up to this point were written"), std::string::npos) << r.out;
   EXPECT_GT(r.traj.size(), 40u) << "the poses before the damage are kept";
@@ -146,7 +146,7 @@ TEST(Damaged, GarbageBytesStopWithAClearErrorAndKeepTheOutputs) {
     f << readFile(path + ".a") << std::string(64, '\x5a') << readFile(path + ".b");
   }
   const RunResult r = runLivo(path, "garbage");
-  EXPECT_NE(r.rc, 0) << r.out;
+  EXPECT_EQ(r.rc, 1) << "a run-time error, not a crash (-1) or a usage error (2): " << r.out;
   EXPECT_NE(r.out.find("livo-run: error:"), std::string::npos) << r.out;
   EXPECT_GT(r.traj.size(), 30u);
   EXPECT_LE(r.ate, 0.0060);  // measured garbage 0.2881 cm (2026-12-02); about twice that

@@ -3,7 +3,7 @@
 // section "Random rigs") with fixed seeds, 12 s each, adaptive + hybrid in one process against the
 // simulator's ground truth, each held to the matrix's pass criteria: first pose at most 3 s after the
 // first data, no gap between poses over 0.5 s after it, ATE at most max(5 cm, 0.5 % of the path), no
-// NaN. The seeds are chosen so that every hard class of the generator has a rig (issue 41, item 4):
+// NaN. The seeds are chosen so that every hard class of the generator has a rig:
 // each rig names its classes below, and the test checks that the draw still holds them.
 // livo-test-long: 900
 // livo-test-deps: livo_sim livo_estimation livo_eval

@@ -53,7 +53,7 @@ TEST(PipelineTimeOffset, EstimateConvergesToTheStampDelayAndMatchesTheTrueOffset
   EXPECT_NEAR(est.time_offset.back().estimate, -0.015, 0.003);
   EXPECT_EQ(est.time_offset_resets, 0u);
   // The run given the true offset is the reference: the estimate must do better than ignoring the
-  // delay and stay within 0.5 cm of the reference (issue #15).
+  // delay and stay within 0.5 cm of the reference.
   EXPECT_LT(est.eval.ate.translation_m.rmse, wrong.eval.ate.translation_m.rmse);
   EXPECT_LE(est.eval.ate.translation_m.rmse, truth.eval.ate.translation_m.rmse + 0.005);
 }

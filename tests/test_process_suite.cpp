@@ -313,7 +313,7 @@ TEST(SuiteNetns, MapServerKilledAndRestartedEstimatorRecovers) {
   ASSERT_GT(split.size(), d.single.size() * 9 / 10) << "odometry kept coming while the map server was down\n" << est_log;
   const double e = ate(readTum(d.gt), split);
   std::cout << "demo with the map server killed for ~1 s: ATE " << e * 100 << " cm (" << split.size() << " poses)\n";
-  // Measured 0.64 cm (2026-12-02; 1.08-1.18 cm before the initialisation of issue #13; the kill's timing
+  // Measured 0.64 cm (2026-12-02; 1.08-1.18 cm before the start of 2026-12-01; the kill's timing
   // varies); about twice the worst seen.
   EXPECT_LE(e, 0.014) << "the estimator recovers on the rebuilt map";
 }

@@ -479,11 +479,11 @@ TEST(RunLocal, ResolvesLivoPmdFromTheFileItself) {
   EXPECT_TRUE(fs::exists(kBin + "/livo-exporter"));
   // Without LOG the replay script names the missing variable; a bad file names its line.
   rc = std::system((rl + " replay --dry-run > " + dir + "/err.txt 2>&1").c_str());
-  EXPECT_NE(rc, 0);
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "a usage error, not a crash: status " << rc;
   EXPECT_NE(readFile(dir + "/err.txt").find("variable LOG is not set"), std::string::npos) << readFile(dir + "/err.txt");
   std::ofstream(dir + "/bad.pmd") << "cmd \"x\" {\n  exec = \"true\";\n  hots = \"localhost\";\n}\n";
   rc = std::system((rl + " x --pmd " + dir + "/bad.pmd > " + dir + "/err2.txt 2>&1").c_str());
-  EXPECT_NE(rc, 0);
+  EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2) << "a usage error, not a crash: status " << rc;
   EXPECT_NE(readFile(dir + "/err2.txt").find("bad.pmd:3: unknown attribute 'hots'"), std::string::npos)
       << readFile(dir + "/err2.txt");
 }

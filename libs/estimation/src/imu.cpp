@@ -15,7 +15,7 @@ void ImuConfig::load(const ConfigNode& n, double imu_rate_hz) {
   n.get("gravity_m_s2", gravity_m_s2).get("gravity_align", gravity_align);
   n.get("init_samples", init_samples).get("init_speed_sigma_mps", init_speed_sigma_mps);
   n.check(!n.has("init_max_samples"), "init_max_samples",
-          "was removed (issue #13): the filter starts once init_samples samples are in; delete the key");
+          "was removed on 2026-12-01: the filter starts once init_samples samples are in; delete the key");
   // The start rules' keys (removed on 2026-12-07, docs/contract-changes.md): harmless, so read and
   // named rather than refused (configs written before still load).
   ignored_keys.clear();

@@ -10,7 +10,7 @@ namespace livo {
 
 namespace {
 
-/// What is fixed over one IMU interval of the trace, for points inside it (issue #14): the interval's
+/// What is fixed over one IMU interval of the trace, for points inside it: the interval's
 /// rotation axis and rate, and the pose of its start composed with the inverse end pose, so that a point
 /// costs one sin / cos and a few products instead of a search, an expSO3 and three pose products.
 struct Interval {

@@ -24,7 +24,7 @@ struct HybridMapConfig {
 
   // Long-term visual map: visual points that left the local cube (paper: edge 800 m, slid every 100 m).
   /// false: no long-term map; visual points leaving the local cube are deleted, not moved (the
-  /// ablation of issue #16: what the long-term map is worth).
+  /// ablation `scripts/bench --ablation longterm`: what the long-term map is worth).
   bool longterm_enabled = true;
   double longterm_edge_m = 800.0;   ///< edge of the long-term cube, m (>= local_edge_m)
   double longterm_slide_m = 100.0;  ///< long-term slide distance, m
@@ -38,7 +38,7 @@ struct HybridMapConfig {
   /// Only points with at least this many observations (VisualPoint::views, ever stored) when they
   /// leave the local cube (matched from
   /// that many views: their patch has shown it can be found again) move to the long-term map; the
-  /// others are deleted. On the revisit scenario (issue #16) 80 % of the points leaving the cube had
+  /// others are deleted. On the revisit scenario (2026-12-02) 80 % of the points leaving the cube had
   /// one observation and were used again after a revisit at 48 %, against 63-95 % for those with two
   /// or more; 2 keeps a fifth of the points and the same error. 1: every point with a patch.
   int longterm_min_observations = 2;

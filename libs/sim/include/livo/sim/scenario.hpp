@@ -1,7 +1,7 @@
 // Simulator scenario: the plain config structs read from config/sim/*.yaml.
 //
-// The keys of DESIGN.md "Simulator scenarios" plus optional extras, all documented in
-// config/sim/README.md. Defaults and units live in the declarations; `load()` only overrides what the
+// The simulator's scenario keys (the contract: docs/contract-changes.md lists what changed) plus optional
+// extras, all documented in config/sim/README.md. Defaults and units live in the declarations; `load()` only overrides what the
 // file names, and loadScenarioFile() rejects keys that nothing reads.
 #pragma once
 
