@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 
@@ -103,32 +104,45 @@ TEST(Imu, PropagationOfExactConstantMotion) {
 
 namespace {
 
-/// A sample of an IMU at rest at attitude R_world_imu with white noise of the given per-sample sigmas
-/// (rad/s, and m/s^2 before the unit scale `unit`), constant gyro bias `bg`.
-ImuSample restingSample(Utime t, const Mat3& R_world_imu, const Vec3& bg, double sigma_g, double sigma_a, double unit,
-                        std::mt19937& rng) {
+/// A sample of an IMU at attitude R_world_imu accelerating at a_world (m/s^2, world frame), with white
+/// noise of the given per-sample sigmas (rad/s, and m/s^2 before the unit scale `unit`) and a constant
+/// gyro bias `bg`.
+ImuSample imuSample(Utime t, const Mat3& R_world_imu, const Vec3& a_world, const Vec3& bg, double sigma_g,
+                    double sigma_a, double unit, std::mt19937& rng) {
   std::normal_distribution<double> n(0, 1);
-  const Vec3 up_body = R_world_imu.transpose() * Vec3::UnitZ();
   ImuSample s;
   s.utime = t;
   s.gyro = bg + sigma_g * Vec3(n(rng), n(rng), n(rng));
-  s.accel = (up_body * 9.81 + sigma_a * Vec3(n(rng), n(rng), n(rng))) / unit;
+  s.accel = (R_world_imu.transpose() * (a_world + Vec3(0, 0, 9.81)) + sigma_a * Vec3(n(rng), n(rng), n(rng))) / unit;
   return s;
+}
+
+/// The same at rest.
+ImuSample restingSample(Utime t, const Mat3& R_world_imu, const Vec3& bg, double sigma_g, double sigma_a, double unit,
+                        std::mt19937& rng) {
+  return imuSample(t, R_world_imu, Vec3::Zero(), bg, sigma_g, sigma_a, unit, rng);
 }
 
 /// The sample sigma of a configured density at 200 Hz.
 double perSample(double density) { return density * std::sqrt(200.0); }
 
 
-/// A sample of an IMU at attitude R_world_imu accelerating at a_world (m/s^2, world frame), white noise
-/// as restingSample's.
-ImuSample acceleratingSample(Utime t, const Mat3& R_world_imu, const Vec3& a_world, double sigma_a, std::mt19937& rng) {
-  std::normal_distribution<double> n(0, 1);
-  ImuSample s;
-  s.utime = t;
-  s.gyro = 1e-3 * Vec3(n(rng), n(rng), n(rng));
-  s.accel = R_world_imu.transpose() * (a_world + Vec3(0, 0, 9.81)) + sigma_a * Vec3(n(rng), n(rng), n(rng));
-  return s;
+/// What ImuInitializer::start() gave.
+struct Started {
+  bool ok = false;
+  NavState x;
+  StateCov P = StateCov::Zero();
+  double tilt_sigma = 0, scale = 0;
+};
+
+/// Feeds sample(k), k = 0, 1, ..., until the start is ready (at most 400), then starts; `fed` the count.
+Started startFrom(ImuInitializer& init, const std::function<ImuSample(int)>& sample, int* fed = nullptr) {
+  int k = 0;
+  for (; k < 400 && !init.ready(); ++k) init.add(sample(k));
+  if (fed) *fed = k;
+  Started r;
+  r.ok = init.start(r.x, r.P, r.tilt_sigma, r.scale);
+  return r;
 }
 
 /// The angle between the start's gravity ("up" mapped to +z) and the true one.
@@ -156,14 +170,18 @@ TEST(Imu, StartFromTheFirstWindowDetectsGUnitsGravityAndBias) {
   const Mat3 R_world_imu = expSO3(Vec3(0.1, -0.2, 0.7));  // tilted IMU
   const Vec3 bg(0.01, -0.02, 0.005);
   int k = 0;
-  for (; k < 400 && !init.ready(); ++k)
-    init.add(restingSample(1000 + k * 5000, R_world_imu, bg, perSample(cfg.gyro_noise), perSample(cfg.accel_noise),
-                           9.81, rng));  // Livox-like: g units
+  const Started st = startFrom(
+      init,
+      [&](int i) {
+        return restingSample(1000 + i * 5000, R_world_imu, bg, perSample(cfg.gyro_noise), perSample(cfg.accel_noise),
+                             9.81, rng);  // Livox-like: g units
+      },
+      &k);
   EXPECT_EQ(k, cfg.init_samples) << "ready once the samples span one window";
-  NavState x;
-  StateCov P;
-  double tilt_sigma = 0, scale = 0;
-  ASSERT_TRUE(init.start(x, P, tilt_sigma, scale));
+  ASSERT_TRUE(st.ok);
+  const NavState& x = st.x;
+  const StateCov& P = st.P;
+  const double tilt_sigma = st.tilt_sigma, scale = st.scale;
   const double n = double(cfg.init_samples);
   EXPECT_NEAR(scale, 9.81, 4 * perSample(cfg.accel_noise) / std::sqrt(n));  // the mean's noise along "up"
   EXPECT_LT((x.bg - bg).cwiseAbs().maxCoeff(), 4 * perSample(cfg.gyro_noise) / std::sqrt(n));
@@ -178,6 +196,14 @@ TEST(Imu, StartFromTheFirstWindowDetectsGUnitsGravityAndBias) {
   EXPECT_NEAR(std::sqrt(P(sidx::kBg, sidx::kBg)), cfg.init_gyro_bias_sigma_rad_s, 1e-12);
   EXPECT_NEAR(std::sqrt(P(sidx::kBa, sidx::kBa)), cfg.init_accel_bias_sigma_mps2, 1e-12);
   EXPECT_TRUE(P.allFinite());
+  // A window whose specific force averages to zero gives no gravity: no start, and the wait says why.
+  ImuInitializer falling(cfg);
+  EXPECT_FALSE(startFrom(falling, [](int i) {
+                 ImuSample z;
+                 z.utime = i * 5000;
+                 return z;
+               }).ok);
+  EXPECT_NE(falling.status().find("give no gravity"), std::string::npos) << falling.status();
 }
 
 // The tilt sigma covers what the window cannot tell from gravity: a car accelerating steadily at
@@ -191,13 +217,13 @@ TEST(Imu, StartTiltSigmaCoversASteadyPushAndVibration) {
     ImuConfig cfg;  // m/s^2 IMU
     ImuInitializer init(cfg);
     std::mt19937 rng(7);
-    for (int k = 0; k < 400 && !init.ready(); ++k)
-      init.add(acceleratingSample(k * 5000, R_world_imu, Vec3(a * 0.6, a * 0.8, 0.0), perSample(cfg.accel_noise), rng));
-    NavState x;
-    StateCov P;
-    double tilt_sigma = 0, scale = 0;
-    ASSERT_TRUE(init.start(x, P, tilt_sigma, scale));
-    const double err = tiltError(x, R_world_imu);
+    const Started st = startFrom(init, [&](int k) {
+      return imuSample(k * 5000, R_world_imu, Vec3(a * 0.6, a * 0.8, 0.0), Vec3::Zero(), 1e-3, perSample(cfg.accel_noise),
+                       1.0, rng);
+    });
+    ASSERT_TRUE(st.ok);
+    const double tilt_sigma = st.tilt_sigma;
+    const double err = tiltError(st.x, R_world_imu);
     EXPECT_NEAR(err, std::atan2(a, 9.81), 0.01);
     // Covered where the clamp allows (17 deg at 3 m/s^2 is beyond the 15 deg cap: within 1.2 sigma).
     EXPECT_LE(err, 1.2 * tilt_sigma) << "tilt error " << err * 180 / M_PI << " deg, sigma " << tilt_sigma * 180 / M_PI;
@@ -208,33 +234,25 @@ TEST(Imu, StartTiltSigmaCoversASteadyPushAndVibration) {
     cfg.rate_hz = 100.0;
     ImuInitializer init(cfg);
     std::mt19937 rng(8);
-    for (int k = 0; k < 400 && !init.ready(); ++k) {
+    const Started st = startFrom(init, [&](int k) {
       const double t = k * 0.01;
-      init.add(acceleratingSample(k * 10000, R_world_imu, Vec3(0, 0, 3.0 * std::sqrt(2.0) * std::sin(2 * M_PI * 91.0 * t)),
-                                  perSample(cfg.accel_noise), rng));
-    }
-    NavState x;
-    StateCov P;
-    double tilt_sigma = 0, scale = 0;
-    ASSERT_TRUE(init.start(x, P, tilt_sigma, scale));
-    EXPECT_LE(tiltError(x, R_world_imu), tilt_sigma);
-    EXPECT_GT(tilt_sigma, 10.0 * M_PI / 180.0) << "an RMS of 3 m/s^2 says the mean may be off by about that much";
+      return imuSample(k * 10000, R_world_imu, Vec3(0, 0, 3.0 * std::sqrt(2.0) * std::sin(2 * M_PI * 91.0 * t)),
+                       Vec3::Zero(), 1e-3, perSample(cfg.accel_noise), 1.0, rng);
+    });
+    ASSERT_TRUE(st.ok);
+    EXPECT_LE(tiltError(st.x, R_world_imu), st.tilt_sigma);
+    EXPECT_GT(st.tilt_sigma, 10.0 * M_PI / 180.0) << "an RMS of 3 m/s^2 says the mean may be off by about that much";
   }
   {
     ImuConfig cfg;
     ImuInitializer init(cfg);
     std::mt19937 rng(9);
-    for (int k = 0; k < 400 && !init.ready(); ++k) {
-      ImuSample s = restingSample(k * 5000, Mat3::Identity(), Vec3::Zero(), perSample(cfg.gyro_noise),
-                                  perSample(cfg.accel_noise), 1.0, rng);
-      s.gyro.z() += 0.3;
-      init.add(s);
-    }
-    NavState x;
-    StateCov P;
-    double tilt_sigma = 0, scale = 0;
-    ASSERT_TRUE(init.start(x, P, tilt_sigma, scale));
-    EXPECT_EQ(x.bg, Vec3::Zero()) << "0.3 rad/s is 15 prior sigmas: a turn, not a bias";
+    const Started st = startFrom(init, [&](int k) {
+      return restingSample(k * 5000, Mat3::Identity(), Vec3(0, 0, 0.3), perSample(cfg.gyro_noise),
+                           perSample(cfg.accel_noise), 1.0, rng);  // a steady turn of 0.3 rad/s
+    });
+    ASSERT_TRUE(st.ok);
+    EXPECT_EQ(st.x.bg, Vec3::Zero()) << "0.3 rad/s is 15 prior sigmas: a turn, not a bias";
   }
 }
 

@@ -6,9 +6,6 @@
 
 namespace livo {
 
-double ImuConfig::gyroSampleSigma() const { return gyro_noise * noise_scale * std::sqrt(rate_hz); }
-double ImuConfig::accelSampleSigma() const { return accel_noise * noise_scale * std::sqrt(rate_hz); }
-
 namespace {
 
 /// The span of one window of init_samples samples.
@@ -85,6 +82,10 @@ bool ImuInitializer::start(NavState& x, StateCov& P, double& tilt_sigma_rad, dou
 std::string ImuInitializer::status() const {
   std::ostringstream os;
   os.precision(3);
+  if (ready()) {
+    os << "the last " << samples_.size() << " IMU samples give no gravity (their mean specific force is zero or not finite)";
+    return os.str();
+  }
   os << "collecting the first " << cfg_.init_samples << " IMU samples (" << windowSeconds(cfg_) << " s)";
   if (first_utime_ >= 0) os << ": " << toSeconds(samples_.back().utime - first_utime_) << " s so far";
   return os.str();

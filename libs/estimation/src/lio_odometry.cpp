@@ -147,7 +147,7 @@ bool LioOdometry::predict(const Frame& frame, LioFrameResult& r) {
   if (!initialized_) {
     if (!initialise(frame)) return false;
     initialized_ = true;
-    seeding_ = !map_started_;
+    seeding_ = true;  // the map's first whole scan follows (a resumed run never comes here)
   }
   r.initialized = true;
   if (frame.utime <= filter_.x().utime) {  // a frame inside the initialisation window: nothing to estimate yet

@@ -18,7 +18,7 @@ struct ImuConfig {
   double noise_scale = 1.0;         ///< multiplies the four densities (inflate for unmodelled effects)
   double inv_exposure_walk = 0.1;   ///< 1/sqrt(s), random walk of tau
   double gravity_m_s2 = 9.81;       ///< local gravity magnitude
-  double rate_hz = 200.0;           ///< imu.rate_hz: nominal sample rate (the static test's noise per sample)
+  double rate_hz = 200.0;           ///< imu.rate_hz: nominal sample rate (the start's window span)
   bool gravity_align = true;        ///< rotate the world so that gravity is (0, 0, -g) (world z up)
   // The start (imu_init.hpp, lio_odometry.hpp):
   /// The filter starts once the IMU samples span init_samples samples at rate_hz: gravity from their
@@ -34,9 +34,6 @@ struct ImuConfig {
   /// imu.rate_hz, is read and checked by the preprocessing's config (PreprocessConfig, loaded first by
   /// PipelineConfig) and given as `rate_hz`.
   void load(const ConfigNode& imu, double rate_hz);
-  /// White-noise sigma of one sample (density * noise_scale * sqrt(rate)).
-  double gyroSampleSigma() const;
-  double accelSampleSigma() const;
   /// Keys of the removed start rules (static test, motion initialiser, deadline) found in the section:
   /// read and ignored (load() keeps them out of the unknown-key error), named in the start's message.
   std::vector<std::string> ignored_keys;

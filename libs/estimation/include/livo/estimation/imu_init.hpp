@@ -39,7 +39,7 @@ class ImuInitializer {
   /// `tilt_sigma_rad` and `accel_scale` for the message and the propagator. False without samples or
   /// without a usable gravity (a mean specific force of zero or not finite).
   bool start(NavState& x, StateCov& P, double& tilt_sigma_rad, double& accel_scale) const;
-  /// Before ready(): what is missing, with the numbers.
+  /// While the filter has not started: what is missing, with the numbers (the window, or a gravity).
   std::string status() const;
 
  private:

@@ -14,8 +14,6 @@
 #include "livo/sensors/preprocess_config.hpp"
 
 #include <bitset>
-#include <memory>
-#include <optional>
 #include <string>
 
 namespace livo {
