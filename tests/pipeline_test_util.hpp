@@ -33,6 +33,7 @@ struct RunSummary {
   double max_pose_gap_s = 0.0; ///< largest step between consecutive poses
   livo::ImageCheckCounters image_counters;
   std::vector<bool> lidar_failed;  ///< per pose in `est`: its LiDAR update failed
+  std::vector<livo::HealthState> health;  ///< per pose in `est`: the frame's state (health.hpp)
   double t_start = 0.0;            ///< first simulated sample, seconds
   /// camera.estimate_time_offset: (seconds after the first sample, estimate s, sigma s, whether the
   /// frame reset it to the prior) per frame.
@@ -86,6 +87,7 @@ inline RunSummary runScenario(livo::sim::SimScenario sc, double duration_s, cons
     out.lio_ok_frames += r.lio.lio_ok;
     out.lidar_failed_frames += r.lidarFailed();
     out.lidar_failed.push_back(r.lidarFailed());
+    out.health.push_back(r.health.state);
     out.images += f.has_image;
     out.visual_frames += r.visual_used;
     sigma_sum += r.lio.sigma_min;

@@ -406,7 +406,7 @@ TEST(EstimatorMessages, ValidationNamesTheField) {
   const livo::odometry_t og = toMsg(o);
   ASSERT_TRUE(validate(og));
   livo::odometry_t om = og;
-  om.status = 64;
+  om.status = 256;
   expectError(validate(om), "odometry_t.status", "unknown bits");
   om = og; om.velocity[1] = std::nan("");
   expectError(validate(om), "odometry_t.velocity[1]");
@@ -445,6 +445,17 @@ TEST(EstimatorMessages, ValidationNamesTheField) {
   expectError(validate(es), "estimator_stats_t.n_planes_matched");
   es = toMsg(EstimatorStats()); es.n_visual_points = 4; es.n_longterm_visual_points = 5;
   expectError(validate(es), "estimator_stats_t.n_longterm_visual_points", "more than n_visual_points");
+  es = toMsg(EstimatorStats()); es.health = 4;
+  expectError(validate(es), "estimator_stats_t.health", "not 0..3");
+  es = toMsg(EstimatorStats()); es.health_reason.assign(513, 'x');
+  expectError(validate(es), "estimator_stats_t.health_reason", "above 512");
+  EstimatorStats lost;
+  lost.health = 3;
+  lost.health_reason = "matched 3 of 900 covered points";
+  EstimatorStats back;
+  ASSERT_TRUE(fromMsg(toMsg(lost), back));
+  EXPECT_EQ(back.health, 3);
+  EXPECT_EQ(back.health_reason, lost.health_reason);
 }
 
 TEST(MessageConversions, FromMsgLeavesOutputUntouchedAndDecodePathReportsField) {

@@ -403,8 +403,8 @@ TEST(ProcessNetns, ExporterWritesItsFilesOnSigint) {
   EXPECT_NE(stats.find("\"health\": {\"first_pose_delay_s\""), std::string::npos) << stats;
   const std::string csv = readFile(dir + "/out/frames.csv");
   std::size_t n_init = 0, n_ok = 0;
-  for (std::size_t at = 0; (at = csv.find(",initialising\n", at)) != std::string::npos; ++at) ++n_init;
-  for (std::size_t at = 0; (at = csv.find(",ok\n", at)) != std::string::npos; ++at) ++n_ok;
+  for (std::size_t at = 0; (at = csv.find(",initialising,\n", at)) != std::string::npos; ++at) ++n_init;
+  for (std::size_t at = 0; (at = csv.find(",ok,\n", at)) != std::string::npos; ++at) ++n_ok;
   EXPECT_EQ(n_init, 1u) << csv;
   EXPECT_EQ(n_ok, 19u) << csv;
   pcl::PointCloud<pcl::PointXYZRGB> cloud;

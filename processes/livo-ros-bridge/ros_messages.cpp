@@ -153,6 +153,8 @@ diagnostic_msgs::DiagnosticStatus estimatorStatus(const livo::OdometryOutput* od
   flag(os::kDegenerate, "LiDAR degenerate", diagnostic_msgs::DiagnosticStatus::WARN);
   flag(os::kMapTimeout, "map answer timed out", diagnostic_msgs::DiagnosticStatus::WARN);
   flag(os::kLidarFailed, "LiDAR update failed", diagnostic_msgs::DiagnosticStatus::ERROR);
+  flag(os::kDegraded, "degraded (a consistency check is out of its bound)", diagnostic_msgs::DiagnosticStatus::WARN);
+  flag(os::kLost, "LOST: the estimate is not trusted", diagnostic_msgs::DiagnosticStatus::ERROR);
   flag(os::kLidarUpdate, "LiDAR update", diagnostic_msgs::DiagnosticStatus::OK);
   flag(os::kVisualUpdate, "visual update", diagnostic_msgs::DiagnosticStatus::OK);
   d.message = msg.empty() ? "tracking" : msg;

@@ -80,6 +80,9 @@ int main(int argc, char** argv) {
                  "Runs the odometry on an LCM log in one process and writes trajectory.tum, frames.csv and\n"
                  "stats.json into DIR, and map.pcd / map.bt unless --no-maps.");
   addOptions(cl, args);
+  cl.epilog("Besides the exit statuses below: " + std::to_string(kExitLostSpans) +
+            " when the run finished and wrote every output but its estimate was lost for a span (frames.csv "
+            "state 'lost'; stats.json health.lost_spans).");
   if (const auto code = cl.parseOrExit(argc, argv)) return *code;
   if (!args.save_map.empty()) args.loop = true;
   if (args.loop && !args.prior_map.empty()) {

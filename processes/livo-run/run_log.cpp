@@ -208,11 +208,12 @@ class FrameSink {
   void operator()(const Frame& frame, const FrameResult& r) {
     if (stop_) return;
     if (!args_.no_maps && r.lio.initialized && !r.lio.points.empty()) addToMaps(frame, r);
-    outputs_.addFrame(record(frame, r));
+    const FrameRecord rec = record(frame, r);
+    outputs_.addFrame(rec);
     if (loop) loop->add(frame, r);
     if (prior)
       if (const std::string msg = prior->add(frame, r); !msg.empty() && !args_.quiet) progress_.message(msg);
-    health.addFrame(frame.utime, r.lio.initialized, r.lidarFailed(), r.visual_used, r.degenerate);
+    health.addFrame(rec);
     explain(frame, r);
     if (r.lio.initialized && !announced_init_ && !args_.quiet) {
       progress_.message("livo-run: " + pipeline_.odometry().initMessage());
@@ -251,6 +252,20 @@ class FrameSink {
       }
       return;
     }
+    if (r.health.state == HealthState::Lost) {  // said at once, then every 2 s of log while it lasts
+      if (lost_since_ < 0) lost_since_ = frame.utime;
+      if (!args_.quiet && (lost_said_ < 0 || toSeconds(frame.utime - lost_said_) >= 2.0)) {
+        lost_said_ = frame.utime;
+        char head[128];
+        std::snprintf(head, sizeof head, "livo-run: LOST at t %.2f s (for %.1f s): ", toSeconds(frame.utime),
+                      toSeconds(frame.utime - lost_since_));
+        progress_.message(head + r.health.reason);
+      }
+    } else if (lost_since_ >= 0) {
+      if (!args_.quiet) progress_.message("livo-run: consistent again at t " + std::to_string(toSeconds(frame.utime)) +
+                                          " s: " + (r.health.reason.empty() ? "ok" : r.health.reason));
+      lost_since_ = lost_said_ = -1;
+    }
     if (!r.lidarFailed()) {
       fail_since_ = -1;
       return;
@@ -268,6 +283,7 @@ class FrameSink {
     }
   }
   Utime first_wait_ = -1, last_said_ = std::numeric_limits<Utime>::min() / 2, fail_since_ = -1;
+  Utime lost_since_ = -1, lost_said_ = -1;
 
   void addToMaps(const Frame& frame, const FrameResult& r) {
     const Pose T_world_imu = r.lio.state.pose();
@@ -457,6 +473,12 @@ int writeOutputs(const Args& args, const Config& cfg, const Pipeline& pipeline, 
     std::cerr << "livo-run: warning: no pose in " << outputs.frames() << " frames: " << sink.health.no_pose_reason
               << "\n";
     return kExitRunError;
+  }
+  if (sink.health.anyLost()) {  // every output was written; the trajectory holds spans not to be trusted
+    std::cerr << "livo-run: warning: the estimate was lost " << sink.health.lost_spans << " time(s), "
+              << sink.health.lost_s << " s in all from t " << sink.health.first_lost_t
+              << " s (frames.csv state 'lost', with the reason); exit status " << kExitLostSpans << "\n";
+    return kExitLostSpans;
   }
   return kExitOk;
 }

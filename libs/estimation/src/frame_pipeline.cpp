@@ -23,6 +23,7 @@ void PipelineConfig::load(const ConfigNode& root) {
   vio.takeCamera(camera);
   visual_map.load(root.section("vio"));
   map.load(root.section("map"));
+  health.load(root.section("health"));
 }
 
 HybridMapConfig PipelineConfig::mapConfig() const {
@@ -36,7 +37,8 @@ FramePipeline::FramePipeline(PipelineConfig cfg)
       filter_(cfg_.lio.imu),
       lio_(cfg_.lio, filter_),
       selector_(cfg_.selector, cfg_.visual_mode),
-      image_check_(cfg_.vio.pixel_noise) {
+      image_check_(cfg_.vio.pixel_noise),
+      health_(cfg_.health) {
   if (cfg_.camera.enabled) {
     camera_ = CameraModel::create(cfg_.camera);
     vignetting_ = VignettingCorrection(cfg_.camera.vignetting, camera_->width(), camera_->height(), camera_->cx(),
@@ -80,6 +82,18 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
     r.time_offset_s = cfg_.preprocess.camera_time_offset_s + r.lio.state.time_offset_s;
     r.time_offset_sigma_s = std::sqrt(std::max(0.0, r.lio.P(sidx::kTimeOffset, sidx::kTimeOffset)));
   }
+  HealthInputs h;
+  h.utime = frame.utime;
+  h.initialized = r.lio.initialized;
+  h.update_ran = r.lio.update_ran;
+  h.n_matched = r.lio.n_matched;
+  h.n_covered = r.lio.n_covered;
+  h.min_matches = cfg_.lio.min_matches;
+  h.correction_chi2 = r.lio.correction_chi2;
+  h.lidar_failed = r.lidar_failed;
+  h.visual_used = r.visual_used;
+  if (r.lio.initialized) h.speed_mps = filter_.x().v_world.norm();
+  r.health = health_.assess(h);
   r.total_ms = watch.elapsedMs();
   return r;
 }

@@ -193,9 +193,14 @@ void LioOdometry::update(LioFrameResult& r, const PlaneFinder& planes, WorkerPoo
     NavState x = filter_.x();
     StateCov P = filter_.P();
     const LioUpdateResult u = lidarUpdate(x, P, r.points, planes, cfg_.lio, pool);
+    r.update_ran = true;
     r.n_matched = u.matched;
     r.iterations = u.iterations;
     r.rms_residual_m = u.rms_residual_m;
+    r.n_covered = u.covered;
+    r.nis = u.nis;
+    r.correction_chi2 = u.correction_chi2;
+    r.correction_m = u.correction_m;
     r.sigma_min = degeneracySigmaMin(u.matched_normals);
     r.matched_index = u.matched_index;
     r.matched_normals = u.matched_normals;

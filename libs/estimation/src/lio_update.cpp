@@ -61,6 +61,8 @@ struct BlockSums {
   Mat66 HtRH = Mat66::Zero();
   Vec66 HtRz = Vec66::Zero();
   double sq = 0.0;
+  double chi2 = 0.0;  ///< sum of z^2 / var
+  int covered = 0;    ///< points whose root voxel holds a plane
 };
 
 /// Step 1 and 2 for points [begin, end): associate each with its most probable plane at `x` and add
@@ -79,13 +81,16 @@ void associateBlock(const NavState& x, const StateCov& P_gate, const std::vector
     pw.p_world = q + x.p_world_imu;
     pw.cov_world = point_cov(points[i], q);
     PlaneMatch m;
-    if (!assoc[i].find(map, pw, m)) continue;
+    const bool found = assoc[i].find(map, pw, m);
+    sums.covered += assoc[i].covered();
+    if (!found) continue;
     const Plane& pl = *m.plane;
     const PlaneResidual r = planeResidual(x, points[i].p_imu, pl.normal, pl.d);
     const double var = pointToPlaneVariance(pl, pw.p_world, cov_meas_world[i]) + cfg.residual_floor_var;
     sums.HtRH.noalias() += r.h * r.h.transpose() / var;
     sums.HtRz += r.h * r.residual / var;
     sums.sq += r.residual * r.residual;
+    sums.chi2 += r.residual * r.residual / var;
     pm.matched = true;
     pm.normal = pl.normal;
   }
@@ -193,12 +198,16 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
     });
     Mat66 HtRH = Mat66::Zero();
     Vec66 HtRz = Vec66::Zero();
-    double sq = 0;
+    double sq = 0, chi2 = 0;
+    int covered = 0;
     for (const BlockSums& b : blocks) {
       HtRH += b.HtRH;
       HtRz += b.HtRz;
       sq += b.sq;
+      chi2 += b.chi2;
+      covered += b.covered;
     }
+    res.covered = covered;
     res.matched_normals.clear();
     res.matched_index.clear();
     for (std::size_t i = 0; i < points.size(); ++i)
@@ -214,6 +223,7 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
       return res;
     }
     res.rms_residual_m = std::sqrt(sq / res.matched);
+    res.nis = chi2 / res.matched;
 
     // 3. Information-form IEKF step: K_bar = (H^T R^-1 H + P^-1)^-1,
     //    delta = -K_bar H^T R^-1 z + Delta - K_bar H^T R^-1 H Delta[0:6], Delta = x_prop [-] x.
@@ -252,6 +262,17 @@ LioUpdateResult lidarUpdate(NavState& x, StateCov& P, const std::vector<BodyPoin
     const StateCov Pj = A * P_prop * A.transpose() + L * S * L.transpose();
     P = 0.5 * (Pj + Pj.transpose());
   }
+  // The correction in the prediction's sigmas, with the LiDAR's own resolution on the pose added (a
+  // covariance the many points shrink below what the map's planes are accurate to would make every
+  // millimetre of plane bias an inconsistency).
+  Mat66 C = P_prop.topLeftCorner<6, 6>();
+  const double beam = cfg.beam_noise_deg * M_PI / 180.0;
+  C.topLeftCorner<3, 3>() += beam * beam * Mat3::Identity();
+  C.bottomRightCorner<3, 3>() += cfg.range_noise_m * cfg.range_noise_m * Mat3::Identity();
+  const StateVec correction = x.boxminus(x_prop);
+  const Vec66 pose = correction.head<6>();
+  res.correction_chi2 = pose.dot(C.ldlt().solve(pose));
+  res.correction_m = correction.segment<3>(sidx::kPos).norm();
   return res;
 }
 

@@ -13,10 +13,15 @@ static_assert(odometry_status::kInitializing == livo::odometry_t::STATUS_INITIAL
                   odometry_status::kVisualUpdate == livo::odometry_t::STATUS_VISUAL_UPDATE &&
                   odometry_status::kMapTimeout == livo::odometry_t::STATUS_MAP_TIMEOUT &&
                   odometry_status::kLidarFailed == livo::odometry_t::STATUS_LIDAR_FAILED &&
-                  odometry_status::kLidarUpdate == livo::odometry_t::STATUS_LIDAR_UPDATE,
+                  odometry_status::kLidarUpdate == livo::odometry_t::STATUS_LIDAR_UPDATE &&
+                  odometry_status::kDegraded == livo::odometry_t::STATUS_DEGRADED &&
+                  odometry_status::kLost == livo::odometry_t::STATUS_LOST,
               "odometry_status must mirror the STATUS_* constants of lcmtypes/livo_odometry_t.lcm");
 
 namespace {
+
+/// Longest health_reason sent or accepted, bytes.
+constexpr std::size_t kMaxHealthReason = 512;
 
 using namespace msgcheck;
 
@@ -55,6 +60,10 @@ Validation checkRegistered(const livo::registered_scan_t& m, const MessageLimits
 
 Validation checkStats(const livo::estimator_stats_t& m) {
   LIVO_MSG_CHECK(utime(m.utime));
+  if (m.health < 0 || m.health > 3) return Validation::fail("health: " + std::to_string(int(m.health)) + " is not 0..3");
+  if (m.health_reason.size() > kMaxHealthReason)
+    return Validation::fail("health_reason: " + std::to_string(m.health_reason.size()) + " bytes, above " +
+                            std::to_string(kMaxHealthReason));
   if (m.frame_index < 0) return Validation::fail("frame_index: negative " + std::to_string(m.frame_index));
   LIVO_MSG_CHECK(nonNegative(m.lio_ms, "lio_ms"));
   LIVO_MSG_CHECK(nonNegative(m.vio_ms, "vio_ms"));
@@ -191,6 +200,8 @@ livo::estimator_stats_t toMsg(const EstimatorStats& s) {
   m.lag_ms = s.lag_ms;
   m.frames_shed = s.frames_shed;
   m.image_shed = s.image_shed;
+  m.health = s.health;
+  m.health_reason = s.health_reason.substr(0, kMaxHealthReason);
   return m;
 }
 
@@ -223,6 +234,8 @@ Validation fromMsg(const livo::estimator_stats_t& m, EstimatorStats& out, const 
   out.lag_ms = m.lag_ms;
   out.frames_shed = m.frames_shed;
   out.image_shed = m.image_shed != 0;
+  out.health = m.health;
+  out.health_reason = m.health_reason;
   return Validation::ok();
 }
 

@@ -26,6 +26,8 @@ EstimatorStats frameStats(const FrameResult& f, Utime utime, std::int64_t frame_
   st.time_offset_s = f.time_offset_s;
   st.time_offset_sigma_s = f.time_offset_sigma_s;
   st.dropped_points = std::int32_t(std::min<std::size_t>(dropped_points, 0x7fffffff));
+  st.health = std::int8_t(f.health.state);
+  st.health_reason = f.health.reason;
   return st;
 }
 
@@ -46,6 +48,8 @@ void applyStats(FrameRecord& rec, const EstimatorStats& s) {
   rec.has_time_offset = s.has_time_offset;
   rec.time_offset_s = s.time_offset_s;
   rec.time_offset_sigma_s = s.time_offset_sigma_s;
+  rec.health = s.health;
+  rec.health_reason = s.health_reason;
 }
 
 }  // namespace livo

@@ -170,7 +170,10 @@ bool walkRegistered(Walker& w, const std::string& f) {
 }
 
 bool walkOdometry(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::odometry_t>(), f); }
-bool walkEstStats(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::estimator_stats_t>(), f); }
+bool walkEstStats(Walker& w, const std::string& f) {
+  // Every field has a fixed size but the last, health_reason (a string: 4 + 1 bytes when empty).
+  return w.skip(fixedSize<livo::estimator_stats_t>() - 5, f) && w.string(f + ".health_reason");
+}
 bool walkMapStats(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::map_stats_t>(), f); }
 bool walkPlane(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::plane_t>(), f); }
 bool walkFilterState(Walker& w, const std::string& f) { return w.skip(fixedSize<livo::filter_state_t>(), f); }

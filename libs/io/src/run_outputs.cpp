@@ -55,9 +55,24 @@ void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bo
 
 const char* frameState(const FrameRecord& f) {
   if (!f.has_pose) return "initialising";
-  if (f.lidar_failed) return f.visual_used ? "lidar_failed" : "imu_only";
-  return "ok";
+  switch (f.health) {
+    case 2: return "degraded";
+    case 3: return "lost";
+    default: return f.lidar_failed ? "degraded" : "ok";  // 0/1: a record without the filter's health
+  }
 }
+
+namespace {
+
+/// The reason as one CSV field: no commas, quotes or line breaks.
+std::string csvField(const std::string& s) {
+  std::string o = s;
+  for (char& c : o)
+    if (c == ',' || c == '"' || c == '\n' || c == '\r') c = ';';
+  return o;
+}
+
+}  // namespace
 
 RunOutputs::RunOutputs(const std::string& dir, bool append)
     : dir_(ensureDir(dir)), append_(append), tum_(dir + "/trajectory.tum", append) {
@@ -70,7 +85,7 @@ RunOutputs::RunOutputs(const std::string& dir, bool append)
   if (!csv_) throw std::runtime_error(csv + ": cannot open for writing");
   if (!previous.exists)
     csv_ << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
-            "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state\n";
+            "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state,reason\n";
   csv_.flush();
 }
 
@@ -84,6 +99,7 @@ void RunOutputs::addFrame(const FrameRecord& f) {
     after_t_ = t;
   }
   records_.push_back(f);
+  records_.back().health_reason = std::string();  // written below, not kept
   if (f.has_pose) tum_.write(toSeconds(f.utime), f.T_world_imu);
   csv_ << std::fixed << std::setprecision(6) << toSeconds(f.utime) << std::setprecision(3) << ',' << f.lio_ms << ','
        << f.vio_ms << ',' << f.total_ms << ',' << std::setprecision(5) << f.sigma_min << ',' << int(f.degenerate)
@@ -93,7 +109,7 @@ void RunOutputs::addFrame(const FrameRecord& f) {
     csv_ << std::setprecision(7) << f.time_offset_s << ',' << f.time_offset_sigma_s;
   else
     csv_ << "nan,nan";
-  csv_ << ',' << frameState(f) << '\n';
+  csv_ << ',' << frameState(f) << ',' << csvField(f.health_reason) << '\n';
   csv_.flush();
   if (!csv_) throw std::runtime_error(dir_ + "/frames.csv: write failed");
 }
@@ -124,10 +140,20 @@ struct FrameTimes {
 
 }  // namespace
 
-void RunHealth::addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate) {
+void RunHealth::addFrame(const FrameRecord& f) {
+  const Utime t = f.utime;
+  const bool has_pose = f.has_pose, lidar_failed = f.lidar_failed, visual_used = f.visual_used;
+  const bool degenerate = f.degenerate;
   if (first_ < 0) first_ = t;
   const double dt = prev_ >= 0 && t > prev_ ? toSeconds(t - prev_) : 0.0;
   prev_ = std::max(prev_, t);
+  const std::string state = frameState(f);
+  const bool lost = state == "lost";
+  if (lost && !prev_lost_) {
+    ++lost_spans;
+    if (first_lost_t < 0) first_lost_t = toSeconds(t);
+  }
+  prev_lost_ = lost;
   if (!has_pose) {
     if (first_pose_ < 0) initialising_s += dt;
     return;
@@ -138,6 +164,9 @@ void RunHealth::addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_
   if (lidar_failed) lidar_failed_s += dt;
   if (lidar_failed && !visual_used) imu_only_s += dt;
   if (degenerate) degenerate_s += dt;
+  if (state == "ok") ++frames_ok;
+  if (state == "degraded") ++frames_degraded, degraded_s += dt;
+  if (lost) ++frames_lost, lost_s += dt;
 }
 
 double RunHealth::firstPoseDelaySeconds() const { return first_pose_ < 0 ? -1.0 : toSeconds(first_pose_ - first_); }
@@ -146,7 +175,10 @@ std::string RunHealth::json() const {
   std::ostringstream os;
   os << "{\"first_pose_delay_s\": " << num(firstPoseDelaySeconds()) << ", \"initialising_s\": " << num(initialising_s)
      << ", \"lidar_failed_s\": " << num(lidar_failed_s) << ", \"imu_only_s\": " << num(imu_only_s)
-     << ", \"degenerate_s\": " << num(degenerate_s) << ", \"longest_pose_gap_s\": " << num(longest_gap_s);
+     << ", \"degenerate_s\": " << num(degenerate_s) << ", \"degraded_s\": " << num(degraded_s)
+     << ", \"lost_s\": " << num(lost_s) << ", \"frames_ok\": " << frames_ok << ", \"frames_degraded\": " << frames_degraded
+     << ", \"frames_lost\": " << frames_lost << ", \"lost_spans\": " << lost_spans
+     << ", \"first_lost_t\": " << num(first_lost_t) << ", \"longest_pose_gap_s\": " << num(longest_gap_s);
   if (!no_pose_reason.empty()) os << ", \"no_pose_reason\": \"" << jsonEscape(no_pose_reason) << "\"";
   os << "}";
   return os.str();

@@ -347,6 +347,8 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   if (f.link.map_timeout) o.status |= odometry_status::kMapTimeout;
   if (f.lidarFailed()) o.status |= odometry_status::kLidarFailed;
   if (f.lio.lio_ok) o.status |= odometry_status::kLidarUpdate;
+  if (f.health.state == HealthState::Degraded) o.status |= odometry_status::kDegraded;
+  if (f.health.state == HealthState::Lost) o.status |= odometry_status::kLost;
   lcm_.publish(channels_.odometry, toMsg(o));
   ++counters_.odometry_published;
   // The whole filter state, for an estimator that restarts (the map server keeps the latest).

@@ -91,7 +91,7 @@ void ExporterNode::writeFrame(Utime t, const Pending& p) {
   }
   outputs_.addFrame(rec);  // flushed per line
   if (rec.has_pose) odometry_poses_.emplace_back(t, rec.T_world_imu);
-  health_.addFrame(t, rec.has_pose, rec.lidar_failed, rec.visual_used, rec.degenerate);
+  health_.addFrame(rec);
   wrote_any_ = true;
   last_written_ = t;
 }

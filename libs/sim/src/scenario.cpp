@@ -50,7 +50,7 @@ void LidarSimConfig::load(const ConfigNode& n) {
   n.get("max_range_m", max_range_m).get("blind_m", blind_m).get("max_incidence_deg", max_incidence_deg);
   n.get("beam_noise_deg", beam_noise_deg);
   n.get("points_per_second", points_per_second).get("beam_divergence_mrad", beam_divergence_mrad);
-  n.get("dropouts_s", dropouts_s);
+  n.get("dropouts_s", dropouts_s).get("freeze_s", freeze_s);
 }
 
 void VibrationConfig::load(const ConfigNode& n) {
@@ -71,6 +71,9 @@ void ImuSimConfig::load(const ConfigNode& n) {
   n.get("gyro_bias_walk", gyro_bias_walk).get("accel_bias_walk", accel_bias_walk);
   n.get("gyro_bias_init", gyro_bias_init).get("accel_bias_init", accel_bias_init);
   vibration.load(n.section("vibration"));
+  n.get("fault_s", fault_s).get("fault_accel_mps2", fault_accel_mps2);
+  n.check(fault_accel_mps2.allFinite() && fault_accel_mps2.norm() < 1000, "fault_accel_mps2",
+          "must be three finite values below 1000 m/s^2");
 }
 
 void CameraSimConfig::load(const ConfigNode& n) {
@@ -154,6 +157,8 @@ void SimScenario::validate() const {
         "must be 0 (no repeat) or at least 20 m");
 
   for (const auto& [key, iv] : {std::make_pair("lidar.dropouts_s", &lidar.dropouts_s),
+                                std::make_pair("lidar.freeze_s", &lidar.freeze_s),
+                                std::make_pair("imu.fault_s", &imu.fault_s),
                                 std::make_pair("camera.dropouts_s", &camera.dropouts_s)}) {
     check(iv->size() % 2 == 0, key, "must be pairs [t0, t1, t0, t1, ...]");
     for (std::size_t i = 0; i + 1 < iv->size(); i += 2)

@@ -93,6 +93,10 @@ void Simulator::imuSample(std::int64_t k, ImuSample& s, ImuTruth& truth) {
     s.accel[a] = truth.accel[a] + accel_bias_[a] + sa * gaussianFromKeys(seed_, RngStream::ImuAccelNoise, kk, a);
   }
   if (c.vibration.active()) addVibration(t, s);
+  if (SimScenario::inDropout(c.fault_s, t)) {  // the IMU fault: a bias jump while it lasts
+    s.accel += c.fault_accel_mps2;
+    truth.accel_bias += c.fault_accel_mps2;
+  }
   const double sq_dt = std::sqrt(1.0 / c.rate_hz);
   for (int a = 0; a < 3; ++a) {
     gyro_bias_[a] += c.gyro_bias_walk * sq_dt * gaussianFromKeys(seed_, RngStream::ImuGyroWalk, kk, a);
@@ -122,6 +126,17 @@ void Simulator::addVibration(double t, ImuSample& s) const {
 }
 
 LidarScan Simulator::lidarScan(std::int64_t j, LidarStats* stats) const {
+  const std::vector<double>& freeze = sc_.lidar.freeze_s;
+  for (std::size_t i = 0; i + 1 < freeze.size(); i += 2) {  // a frozen LiDAR repeats its last scan
+    const double t = relTime(lidarUtime(j));
+    if (!(t >= freeze[i] && t < freeze[i + 1])) continue;
+    std::int64_t last = j;
+    while (last > 0 && relTime(lidarUtime(last)) >= freeze[i]) --last;
+    if (relTime(lidarUtime(last)) >= freeze[i]) break;  // nothing before the freeze to repeat
+    LidarScan scan = lidarScan(last, stats);
+    scan.utime = lidarUtime(j);
+    return scan;
+  }
   LidarScan scan;
   scan.utime = lidarUtime(j);
   scan.sensor = sc_.lidar.model;

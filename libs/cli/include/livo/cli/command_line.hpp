@@ -29,6 +29,9 @@ namespace livo {
 constexpr int kExitOk = 0;
 constexpr int kExitRunError = 1;  ///< run-time error: bad input data, I/O, a run that failed
 constexpr int kExitUsage = 2;     ///< usage or configuration error: nothing was run
+/// The run finished and wrote every output, but its estimate was lost for a span (frames.csv state
+/// `lost`): livo-run.
+constexpr int kExitLostSpans = 3;
 
 /// The project version (top-level CMakeLists.txt, project(VERSION)).
 const char* projectVersion();

@@ -76,6 +76,7 @@ class FramePipeline {
   std::unique_ptr<CameraModel> camera_;  ///< null without a camera
   std::unique_ptr<WorkerPool> pool_;     ///< null with one thread
   ImageCheck image_check_;
+  HealthMonitor health_;
   VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
   std::size_t time_offset_resets_ = 0;

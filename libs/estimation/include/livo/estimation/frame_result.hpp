@@ -1,6 +1,7 @@
 // What one frame of the per-frame pipeline (frame_pipeline.hpp) produced.
 #pragma once
 
+#include "livo/estimation/health.hpp"
 #include "livo/estimation/image_check.hpp"
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/map/hybrid_map.hpp"
@@ -47,7 +48,8 @@ struct FrameResult {
   /// lio.min_matches matches): the frame counts as degenerate, its scan stays out of the map, and the
   /// visual update (if the camera can) carries the estimate.
   bool lidar_failed = false;
-  bool map_seeded = false;  ///< the LiDAR update failed with nothing around in the map: the scan seeded it
+  bool map_seeded = false;
+  FrameHealth health;  ///< the filter's consistency checks and the frame's state (health.hpp)  ///< the LiDAR update failed with nothing around in the map: the scan seeded it
   bool lidarFailed() const { return lidar_failed; }
 };
 

@@ -37,6 +37,7 @@ struct LioFrameResult {
   bool initialized = false;  ///< false while the IMU initialisation is collecting samples
   bool lio_ok = false;       ///< the LiDAR update ran with enough matches
   bool map_started = false;  ///< this frame created the first map content
+  bool update_ran = false;   ///< the LiDAR update ran against the map (from the frame after its first scan)
   NavState state;            ///< the filter's state at the end of the step that wrote it (a record)
   StateCov P = StateCov::Zero();
   int n_raw_points = 0;
@@ -45,6 +46,10 @@ struct LioFrameResult {
   int iterations = 0;
   double sigma_min = 0.0;    ///< degeneracy metric of the matched normals
   double rms_residual_m = 0.0;
+  int n_covered = 0;             ///< points in root voxels holding a plane (LioUpdateResult::covered)
+  double nis = 0.0;              ///< LioUpdateResult::nis
+  double correction_chi2 = 0.0;  ///< LioUpdateResult::correction_chi2
+  double correction_m = 0.0;     ///< LioUpdateResult::correction_m
   double lio_ms = 0.0;       ///< propagation + undistortion (predict) + update, without the map's answer
   double map_ms = 0.0;       ///< map insertion
   std::vector<BodyPoint> points;  ///< the frame's downsampled points (IMU frame at utime)

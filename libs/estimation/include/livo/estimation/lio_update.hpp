@@ -47,6 +47,14 @@ struct LioUpdateResult {
   std::vector<Vec3> matched_normals;  ///< plane normal of each matched point (final iteration)
   std::vector<int> matched_index;     ///< index into the input points, parallel to matched_normals
   double rms_residual_m = 0.0;
+  // Consistency of the update (health.hpp), at the final iteration:
+  int covered = 0;             ///< points whose root voxel holds a plane (matched or not)
+  double nis = 0.0;            ///< mean z^2 / var over the matched points (their normalised innovation)
+  /// (x_post [-] x_prop)^T P_prop^-1 (x_post [-] x_prop): how far the LiDAR moved the state from the
+  /// IMU's prediction in the prediction's own sigmas (chi-square with at most 6 degrees of freedom
+  /// when the filter is consistent: the measurement informs the pose).
+  double correction_chi2 = 0.0;
+  double correction_m = 0.0;    ///< |position part of x_post [-] x_prop|, m
 };
 
 /// Point-to-plane residual and its Jacobian for one point at state x (analytic):

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/estimation/health.hpp"
 #include "livo/estimation/lio_odometry.hpp"
 #include "livo/estimation/selector_config.hpp"
 #include "livo/estimation/vio_update.hpp"
@@ -22,6 +23,7 @@ struct PipelineConfig {
   VioConfig vio;
   VisualMapConfig visual_map;
   HybridMapConfig map;  ///< section `map`; its mode comes from map_mode
+  HealthConfig health;  ///< section `health`
   VisualMode visual_mode = VisualMode::Adaptive;  ///< command line --visual-mode
   MapMode map_mode = MapMode::Hybrid;             ///< command line --map-mode
   /// Threads of the per-frame loops (command line `--threads`; 1: none started). Results are the same

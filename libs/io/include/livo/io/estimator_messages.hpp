@@ -25,7 +25,9 @@ constexpr std::int32_t kVisualUpdate = 4;
 constexpr std::int32_t kMapTimeout = 8;
 constexpr std::int32_t kLidarFailed = 16;
 constexpr std::int32_t kLidarUpdate = 32;  ///< the LiDAR update was applied to this frame
-constexpr std::int32_t kKnownBits = 63;  ///< any other bit set is a validation error
+constexpr std::int32_t kDegraded = 64;     ///< a consistency check is out of its bound (health.hpp)
+constexpr std::int32_t kLost = 128;        ///< the estimate is not trusted
+constexpr std::int32_t kKnownBits = 255;  ///< any other bit set is a validation error
 }  // namespace odometry_status
 
 /// Estimator output per frame (odometry_t). `state.utime` is sent as `utime` (toMsg uses `utime`;
@@ -71,6 +73,9 @@ struct EstimatorStats {
   float lag_ms = 0.f;                 ///< frame arrival -> outputs published, wall clock
   std::int32_t frames_shed = 0;       ///< frames dropped just before this one (their IMU merged into it)
   bool image_shed = false;            ///< the frame's image was left out
+  /// The filter's health: 0 initialising, 1 ok, 2 degraded, 3 lost (HealthState's order), and why.
+  std::int8_t health = 0;
+  std::string health_reason;
 };
 
 // ---- struct -> message. RegisteredScan with intensity of another size than points, or rgb neither

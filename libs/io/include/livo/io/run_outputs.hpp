@@ -6,7 +6,8 @@
 //                   livo-exporter; n_longterm_points: of n_visual_points, those that came through the
 //                   long-term visual map, held by it or returned from it on a revisit),
 //                   time_offset_s, time_offset_sigma_s (camera.estimate_time_offset: the camera's time
-//                   offset estimate and its sigma; nan when not estimated)
+//                   offset estimate and its sigma; nan when not estimated), state (frameState below),
+//                   reason (why the state is not ok: the failed checks with their values, ';'-separated)
 //   stats.json      frames, visual_frames, degenerate_frames, timed_frames, timing_ms {lio, vio,
 //                   vio_per_visual_frame, map, total} x {mean, median, p95, max}, peak_rss_mb, map
 //                   camera {time_offset_estimate_s, time_offset_sigma_s} (the last frame's, when estimated),
@@ -54,30 +55,42 @@ struct FrameRecord {
   /// initialised. livo-run: the map's O(1) estimate with a memory cap, else an exact count every few
   /// frames carried forward (processes/livo-run/main.cpp).
   std::uint64_t map_bytes = 0;
+  /// The filter's health (estimator_stats_t.health): 0 initialising, 1 ok, 2 degraded, 3 lost, and
+  /// why (frames.csv's state and reason columns; the reason is not kept past the row).
+  std::int8_t health = 1;
+  std::string health_reason;
 };
 
 /// The frame's state in frames.csv's `state` column, as RunHealth counts it: initialising (no pose yet),
-/// imu_only (the LiDAR update failed and no image was used), lidar_failed (it failed, an image was used),
-/// ok. (Degenerate frames are their own column.)
+/// ok, degraded (a consistency check of the filter is out of its bound, or the LiDAR update failed:
+/// the pose is kept and flagged; the `reason` column says which), lost (the estimate is not trusted).
+/// (Degenerate frames are their own column.)
 const char* frameState(const FrameRecord& f);
 
 /// What a run did over time (stats.json section "health"), from its frames in order: the delay from
 /// the first frame to the first pose, the time spent initialising (frames without a pose before the
-/// first), with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used) and
-/// LiDAR-degenerate, and the longest gap between consecutive poses. A frame counts for the interval
-/// since the previous frame.
+/// first), with the LiDAR update failing, on the IMU alone (LiDAR failed and no image used),
+/// LiDAR-degenerate, degraded and lost (the frame's state), the frames in each state, the lost spans
+/// (their count and the first one's start) and the longest gap between consecutive poses. A frame
+/// counts for the interval since the previous frame.
 struct RunHealth {
-  void addFrame(Utime t, bool has_pose, bool lidar_failed, bool visual_used, bool degenerate);
+  void addFrame(const FrameRecord& f);
   bool anyPose() const { return first_pose_ >= 0; }
   /// Seconds from the first frame to the first pose (-1 without a pose).
   double firstPoseDelaySeconds() const;
   /// The JSON object written as "health" (without a trailing newline).
   std::string json() const;
   double initialising_s = 0, lidar_failed_s = 0, imu_only_s = 0, degenerate_s = 0, longest_gap_s = 0;
+  double degraded_s = 0, lost_s = 0;
+  std::size_t frames_ok = 0, frames_degraded = 0, frames_lost = 0;
+  std::size_t lost_spans = 0;       ///< runs of consecutive lost frames
+  double first_lost_t = -1;         ///< the first lost frame's time, s (-1: none)
+  bool anyLost() const { return lost_spans > 0; }
   std::string no_pose_reason;  ///< set by the run when it ends without a pose
 
  private:
   Utime first_ = -1, prev_ = -1, first_pose_ = -1, last_pose_ = -1;
+  bool prev_lost_ = false;
 };
 
 /// Map size at the end of a run.

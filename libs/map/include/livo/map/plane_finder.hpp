@@ -56,6 +56,9 @@ class CachedAssociation {
  public:
   static constexpr int kMaxCached = 8;
   bool find(const PlaneFinder& finder, const PointWithCov& pw, PlaneMatch& out);
+  /// After find(): the root voxel of the point it was given holds at least one plane (the map covers
+  /// the point, whether or not a plane passed the gates).
+  bool covered() const { return own_.n > 0; }
 
  private:
   struct Candidates {

@@ -84,6 +84,9 @@ struct LidarSimConfig {
   /// [t0, t1, t0, t1, ...] seconds from the start: no scan starts inside any [t0, t1) (a blinded or
   /// dropped LiDAR stream).
   std::vector<double> dropouts_s;
+  /// [t0, t1, ...] seconds from the start: a frozen LiDAR (off by default): every scan that starts
+  /// inside [t0, t1) repeats the points of the last scan before t0 (same returns, the new stamp).
+  std::vector<double> freeze_s;
   void load(const ConfigNode& n);
 };
 
@@ -107,6 +110,10 @@ struct ImuSimConfig {
   Eigen::Vector3d gyro_bias_init{0.0, 0.0, 0.0};   ///< rad/s
   Eigen::Vector3d accel_bias_init{0.0, 0.0, 0.0};  ///< m/s^2
   VibrationConfig vibration;       ///< imu.vibration {accel_mps2, gyro_rad_s, freq_hz}
+  /// An IMU fault (off by default): inside every [t0, t1) of fault_s (seconds from the start) the
+  /// accelerometer reads fault_accel_mps2 more (body frame), a bias jump that comes and goes.
+  std::vector<double> fault_s;
+  Eigen::Vector3d fault_accel_mps2{0.0, 0.0, 0.0};
   void load(const ConfigNode& n);
 };
 

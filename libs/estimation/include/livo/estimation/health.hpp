@@ -1,0 +1,80 @@
+// The filter's own health, every frame (docs/algorithms.md section 10): consistency checks whose
+// bounds follow from the configured noise, and the frame's state from them: initialising, ok,
+// degraded (a check is outside its bound: the pose is kept and flagged) or lost (the checks fail
+// persistently: the estimate is not trusted).
+#pragma once
+
+#include "livo/common/config.hpp"
+#include "livo/common/types.hpp"
+
+#include <deque>
+#include <string>
+
+namespace livo {
+
+struct HealthConfig {
+  /// The LiDAR's correction of the IMU's prediction, (x_post [-] x_prop)^T (P_prop + F)^-1 (...),
+  /// with F the LiDAR's own resolution on the pose (range noise on the position, beam noise on the
+  /// rotation), is a chi-square of at most 6 degrees of freedom when the filter is consistent; above
+  /// this bound (6 dof, 0.1 %) the frame is inconsistent.
+  double correction_chi2_max = 22.46;
+  /// Of the points that fall into map voxels holding a plane, at least this share must match one
+  /// (0.89 or more in 99 % of the frames of every shipped scenario, 2026-12-07: edges and non-planar
+  /// leaves); fewer: the scan does not fit the map where the map says it should (a pose 12 cm off
+  /// along one wall's normal in a box leaves that wall's third of the points unmatched: 0.67).
+  double min_match_share = 0.75;
+  /// Window of the persistence rule: the frame is lost when at least half of the frames of the last
+  /// window_s seconds (and 3 or more) are inconsistent; the state returns to ok after window_s s
+  /// without an inconsistent frame.
+  double window_s = 0.5;
+  /// A speed no rig of this configuration reaches, m/s: above it the estimate is lost at once.
+  double max_speed_mps = 80.0;
+
+  /// Reads the `health` section (optional; every key has a default).
+  void load(const ConfigNode& health);
+};
+
+enum class HealthState { Initialising, Ok, Degraded, Lost };
+/// "initialising", "ok", "degraded", "lost" (frames.csv's state column).
+const char* healthName(HealthState s);
+
+/// What one frame tells the monitor (from the LiDAR-inertial step and the frame's result).
+struct HealthInputs {
+  Utime utime = 0;
+  bool initialized = false;   ///< the filter has started (the frame has a pose)
+  bool update_ran = false;    ///< the LiDAR update ran against a map (not the map's first scan)
+  int n_matched = 0;
+  int n_covered = 0;          ///< points in map voxels holding a plane
+  int min_matches = 20;       ///< lio.min_matches: fewer covered points say nothing about the fit
+  double correction_chi2 = 0.0;
+  bool lidar_failed = false;  ///< the LiDAR update failed where the map should have matched
+  bool visual_used = false;
+  double speed_mps = 0.0;
+};
+
+struct FrameHealth {
+  HealthState state = HealthState::Initialising;
+  bool inconsistent = false;  ///< this frame failed a consistency check (correction, match share, speed)
+  /// What put the frame out of ok: ';'-separated, no commas (a CSV field); empty when ok.
+  std::string reason;
+};
+
+/// One per filter; assess() once per frame, in time order. After a lost span the frames that follow
+/// are degraded ("not re-anchored"): the filter is consistent again, but nothing has tied its frame
+/// back to the map before the span.
+class HealthMonitor {
+ public:
+  explicit HealthMonitor(HealthConfig cfg = {}) : cfg_(cfg) {}
+  FrameHealth assess(const HealthInputs& in);
+  const HealthConfig& config() const { return cfg_; }
+
+ private:
+  HealthConfig cfg_;
+  std::deque<std::pair<Utime, bool>> window_;  ///< (frame time, inconsistent) of the last window_s
+  bool lost_ = false;
+  Utime last_inconsistent_ = -1;
+  Utime lost_since_ = -1;
+  std::pair<Utime, Utime> lost_span_{-1, -1};  ///< the last lost span (first, last inconsistent frame)
+};
+
+}  // namespace livo
