@@ -66,6 +66,7 @@ inline std::vector<double> csvColumn(const fs::path& p, const std::string& colum
     std::vector<std::string> cells;
     std::stringstream ss(s);
     for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    if (!s.empty() && s.back() == ',') cells.emplace_back();  // an empty last field (frames.csv's reason)
     return cells;
   };
   const std::vector<std::string> header = split(line);

@@ -62,12 +62,24 @@ TEST(Health, EachCheckOutOfItsBoundDegradesTheFrameAndSaysWhy) {
   fresh.n_covered = 10;
   fresh.n_matched = 2;
   EXPECT_EQ(m.assess(fresh).state, HealthState::Ok);
-  // ... one that does not fit where it has them is.
+  // ... one that does not fit where it has them is: a share below half of its median over the
+  // consistent frames before (0.95 here).
+  for (int k = 1; k <= 5; ++k) EXPECT_EQ(m.assess(consistent(0.2 + 0.01 * k)).state, HealthState::Ok);
   HealthInputs misfit = consistent(0.3);
-  misfit.n_matched = 300;
+  misfit.n_matched = 400;
   h = m.assess(misfit);
   EXPECT_EQ(h.state, HealthState::Degraded);
-  EXPECT_NE(h.reason.find("matched 300 of 1000 covered points"), std::string::npos) << h.reason;
+  EXPECT_NE(h.reason.find("matched 400 of 1000 covered points (usually 0.95)"), std::string::npos) << h.reason;
+  // A map whose share is low all along (a young map) sets its own reference: 0.4 is no misfit there.
+  HealthMonitor young;
+  for (int k = 1; k <= 10; ++k) {
+    HealthInputs in = consistent(0.1 * k);
+    in.n_matched = 450;
+    EXPECT_EQ(young.assess(in).state, HealthState::Ok);
+  }
+  HealthInputs lower = consistent(1.1);
+  lower.n_matched = 400;
+  EXPECT_EQ(young.assess(lower).state, HealthState::Ok);
   // A failed LiDAR update degrades the frame without counting as an inconsistency.
   HealthInputs failed = consistent(0.4);
   failed.lidar_failed = true;

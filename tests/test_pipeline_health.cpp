@@ -1,7 +1,7 @@
 // Never silently lost (docs/algorithms.md section 10): faults of the simulator (config/sim/README.md:
 // imu.fault_s, lidar.freeze_s) injected into the demo, end to end in one process against the ground
-// truth. The run must say `lost` within 0.5 s of its position error passing 0.5 m, and the undisturbed
-// demo must have no frame out of `ok`.
+// truth. A diverging run must say `lost` within 0.5 s of its position error passing 0.5 m, a frozen
+// LiDAR is recognised and left out, and the undisturbed demo has no frame out of `ok`.
 // livo-test-whole (each scenario is simulated once)
 // livo-test-deps: livo_sim livo_estimation livo_eval
 #include "pipeline_test_util.hpp"
@@ -71,21 +71,28 @@ TEST(PipelineHealth, AnImuBiasJumpThatDivergesTheFilterIsLostWithinHalfASecond) 
     EXPECT_EQ(r.health[i], HealthState::Ok) << r.est[i].t - r.t_start;
 }
 
-TEST(PipelineHealth, AFrozenLidarIsFlaggedWithinItsFirstFrames) {
+TEST(PipelineHealth, AFrozenLidarIsRecognisedAndTheFilterCarriesOnWithoutIt) {
   sim::SimScenario sc = demo();
   sc.lidar.freeze_s = {10.0, 12.0};  // the same sweep repeated for 2 s
   const RunSummary r = runScenario(sc, 0.0);
   const std::vector<double> err = errorsAlignedBefore(r, 10.0);
-  double first_flag = -1;
+  double first_flag = -1, max_err = 0;
+  std::size_t flagged = 0;
   for (std::size_t i = 0; i < r.est.size(); ++i) {
     const double t = r.est[i].t - r.t_start;
     if (t < 10.0) EXPECT_EQ(r.health[i], HealthState::Ok) << t;
     if (t >= 10.0 && first_flag < 0 && r.health[i] != HealthState::Ok) first_flag = t;
-    EXPECT_FALSE(err[i] > 1.0 && r.health[i] == HealthState::Ok) << "t " << t << " err " << err[i];
+    flagged += t >= 10.0 && t < 12.0 && r.health[i] == HealthState::Degraded;
+    max_err = std::max(max_err, err[i]);
   }
-  std::printf("frozen LiDAR from 10 s: first frame out of ok at %.2f s; lost %zu frames, degraded %zu\n", first_flag,
-              count(r, HealthState::Lost), count(r, HealthState::Degraded));
-  ASSERT_GE(first_flag, 10.0);
-  EXPECT_LE(first_flag, 10.3);  // measured 2026-12-07: 10.10 s (56 frames lost, 44 degraded after)
-  EXPECT_GT(count(r, HealthState::Lost), 0u);
+  std::printf("frozen LiDAR 10-12 s: first frame out of ok at %.2f s, %zu of the 20 frozen frames degraded, lost %zu, "
+              "largest error %.3f m, ATE %.2f cm\n",
+              first_flag, flagged, count(r, HealthState::Lost), max_err, r.eval.ate.translation_m.rmse * 100);
+  // The repeated sweeps are recognised from the second on (the first is the last real one).
+  EXPECT_GE(first_flag, 10.0);
+  EXPECT_LE(first_flag, 10.15);  // measured 2026-12-07: 10.10 s, 19 of 20 frames degraded, none lost
+  EXPECT_GE(flagged, 18u);
+  EXPECT_EQ(count(r, HealthState::Lost), 0u);
+  // The IMU carries the 2 s: no divergence (measured 2026-12-07: 3.4 cm at most).
+  EXPECT_LT(max_err, 0.10);
 }

@@ -1,6 +1,7 @@
 #include "livo/estimation/frame_pipeline.hpp"
 
 #include "livo/common/timing.hpp"
+#include "livo/estimation/scan_registration.hpp"
 #include "livo/estimation/visual_step.hpp"
 #include "livo/map/frustum_keys.hpp"
 
@@ -8,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <sstream>
 
 namespace livo {
 
@@ -55,6 +58,11 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   // 1. Initialisation, propagation, undistortion, downsampling (nothing to estimate before the IMU
   // is initialised or inside its window).
   if (lio_.predict(frame, r.lio)) {
+    r.repeated_sweep = repeatsLastSweep(frame.sweep);
+    if (r.repeated_sweep) {  // no information in it: the frame goes on without the LiDAR
+      r.lio.points.clear();
+      r.lio.n_points = 0;
+    }
     // 2-3. The planes around the predicted scan, the iterated LiDAR update, the scan into the map.
     const PlaneFinder& planes = map.planesFor(frame, r.lio);
     lidarStep(map, planes, r);
@@ -70,6 +78,7 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
   }
   // 7. The frame's end at its final state: slides and the memory cap in process, the update message
   // to the map server. Visual point pointers of this frame are not used beyond this point.
+  healthStep(frame, map, r);
   if (r.lio.initialized) {
     r.lio.state = filter_.x();  // the frame's output: the filter after every update of this frame
     r.lio.P = filter_.P();
@@ -82,18 +91,6 @@ FrameResult FramePipeline::process(const Frame& frame, MapAccess& map) {
     r.time_offset_s = cfg_.preprocess.camera_time_offset_s + r.lio.state.time_offset_s;
     r.time_offset_sigma_s = std::sqrt(std::max(0.0, r.lio.P(sidx::kTimeOffset, sidx::kTimeOffset)));
   }
-  HealthInputs h;
-  h.utime = frame.utime;
-  h.initialized = r.lio.initialized;
-  h.update_ran = r.lio.update_ran;
-  h.n_matched = r.lio.n_matched;
-  h.n_covered = r.lio.n_covered;
-  h.min_matches = cfg_.lio.min_matches;
-  h.correction_chi2 = r.lio.correction_chi2;
-  h.lidar_failed = r.lidar_failed;
-  h.visual_used = r.visual_used;
-  if (r.lio.initialized) h.speed_mps = filter_.x().v_world.norm();
-  r.health = health_.assess(h);
   r.total_ms = watch.elapsedMs();
   return r;
 }
@@ -145,6 +142,12 @@ void FramePipeline::lidarStep(MapAccess& map, const PlaneFinder& planes, FrameRe
     if (map.holdsAround(r.lio, cfg_.lio.min_matches)) return;
     r.map_seeded = true;
   }
+  // A lost filter's scans, or a scan the update could not make consistent with the map, would write
+  // the error into the map (and a recovery would then register against it).
+  if (health_.lost() || health_.inconsistentUpdate(healthInputs(r))) {
+    r.scan_withheld = true;
+    return;
+  }
   Stopwatch map_watch;
   map.insertScan(lio_.scanForMap(r.lio));
   r.lio.map_ms = map_watch.elapsedMs();
@@ -192,6 +195,118 @@ void FramePipeline::visualStep(const Frame& frame, const Image& gray, MapAccess&
   r.vio_rms_before = vs.update.rms_before;
   r.vio_rms_after = vs.update.rms_after;
   r.vio_ms = keys_ms + watch.elapsedMs();
+}
+
+HealthInputs FramePipeline::healthInputs(const FrameResult& r) const {
+  HealthInputs h;
+  h.utime = r.lio.utime;
+  h.initialized = r.lio.initialized;
+  h.update_ran = r.lio.update_ran;
+  h.n_matched = r.lio.n_matched;
+  h.n_covered = r.lio.n_covered;
+  h.min_matches = cfg_.lio.min_matches;
+  h.correction_chi2 = r.lio.correction_chi2;
+  h.lidar_failed = r.lidar_failed;
+  h.repeated_sweep = r.repeated_sweep;
+  h.visual_used = r.visual_used;
+  if (r.lio.initialized) h.speed_mps = filter_.x().v_world.norm();
+  return h;
+}
+
+bool FramePipeline::repeatsLastSweep(const LidarScan& sweep) {
+  // A fingerprint of the sweep's points as a set (a sum of per-point FNV-1a hashes over coordinates
+  // and intensity: a frame cut at image times from a repeated scan holds the same points in another
+  // order). A real sweep never repeats to the bit (range noise); a frozen driver's does.
+  std::uint64_t sum = 0;
+  for (const auto& p : sweep.points) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (const float v : {p.p_lidar.x(), p.p_lidar.y(), p.p_lidar.z(), p.intensity}) {
+      std::uint32_t u;
+      std::memcpy(&u, &v, sizeof u);
+      for (int k = 0; k < 4; ++k) h = (h ^ ((u >> (8 * k)) & 0xffu)) * 1099511628211ull;
+    }
+    sum += h;
+  }
+  const bool repeat = !sweep.points.empty() && sum == last_sweep_hash_ && sweep.points.size() == last_sweep_size_;
+  last_sweep_hash_ = sum;
+  last_sweep_size_ = sweep.points.size();
+  return repeat;
+}
+
+void FramePipeline::healthStep(const Frame& frame, MapAccess& map, FrameResult& r) {
+  r.health = health_.assess(healthInputs(r));
+  if (r.health.state == HealthState::Ok) {
+    trusted_.push_back(Trusted{filter_.x(), filter_.P()});
+    while (trusted_.size() > 1 && toSeconds(trusted_.back().x.utime - trusted_.front().x.utime) > 2.0) trusted_.pop_front();
+  }
+  if (r.health.state == HealthState::Lost && cfg_.health.recover) recover(frame, map, r);
+}
+
+bool FramePipeline::recover(const Frame& frame, MapAccess& map, FrameResult& r) {
+  const auto say = [&r](const std::string& what) { r.health.reason += (r.health.reason.empty() ? "" : "; ") + what; };
+  const Utime window = Utime(std::llround(cfg_.health.window_s * 1e6));
+  const Trusted* trusted = nullptr;
+  for (auto it = trusted_.rbegin(); it != trusted_.rend() && trusted == nullptr; ++it)
+    if (it->x.utime <= health_.lostSince() - window) trusted = &*it;
+  if (trusted == nullptr && !trusted_.empty()) trusted = &trusted_.front();  // the oldest kept
+  if (trusted == nullptr || static_cast<int>(r.lio.points.size()) < cfg_.lio.min_matches) return false;
+  if (last_recovery_try_ >= 0 && frame.utime - last_recovery_try_ < window) return false;
+  last_recovery_try_ = frame.utime;
+  // Where to search: the last trusted pose carried on at its velocity (no later estimate is trusted),
+  // the rotation the gyro integrated since; the cube grows by half the distance travelled since.
+  const NavState& xt = trusted->x;
+  const NavState xc = filter_.x();  // a copy: the restart below replaces the filter's
+  const double dt = toSeconds(frame.utime - xt.utime);
+  const Vec3 guess = xt.p_world_imu + xt.v_world * dt;
+  SearchBounds bounds;
+  bounds.translation_m = std::clamp(1.0 + 0.5 * xt.v_world.norm() * dt, 1.0, 10.0);
+  bounds.yaw_rad = 30.0 * M_PI / 180.0;
+  bounds.tilt_rad = 10.0 * M_PI / 180.0;
+  LioFrameResult probe;  // the map's planes around the guess (the map server: a query there)
+  probe.state = xc;
+  probe.state.p_world_imu = guess;
+  probe.points = r.lio.points;
+  const PlaneFinder& planes = map.planesFor(frame, probe);
+  const ScanRegistrationConfig rc = ScanRegistrationConfig::from(cfg_.lio.lio, cfg_.lio.map, cfg_.lio.min_matches);
+  SearchMap search(rc);
+  search.addPlanes(planes, guess, bounds.translation_m + cfg_.preprocess.max_range_m);
+  const ScanRegistration reg(rc);
+  NavState init = xc;
+  init.p_world_imu = guess;
+  const ScanRegistrationResult res = reg.align(r.lio.points, planes, search, init.pose(), bounds);
+  std::ostringstream os;
+  os.precision(3);
+  if (!res.success || res.search_ambiguous) {
+    os << "recovery " << (res.success ? "ambiguous (the map tells several poses apart little)" : "failed: " + res.reason);
+    say(os.str());
+    return false;
+  }
+  // The restart: the registered pose, the trusted velocity and biases with the start's sigmas.
+  NavState x = xc;
+  x.R_world_imu = res.T_world_body.rotation();
+  x.p_world_imu = res.T_world_body.translation();
+  x.v_world = xt.v_world;
+  x.bg = xt.bg;
+  x.ba = xt.ba;
+  x.g_world = xt.g_world;  // a diverging filter bends its gravity estimate too
+  StateCov P = trusted->P;
+  const auto block = [&P](int at, double sigma) {
+    P.middleRows<3>(at).setZero();
+    P.middleCols<3>(at).setZero();
+    P.block<3, 3>(at, at) = sigma * sigma * Mat3::Identity();
+  };
+  block(sidx::kRot, 1.0 * M_PI / 180.0);
+  block(sidx::kPos, 0.05);
+  block(sidx::kVel, cfg_.lio.imu.init_speed_sigma_mps);  // the trusted velocity is a guess: the start's sigma
+  filter_.start(x, P, filter_.accelScale(), /*time_offset_prior_in_P=*/true);
+  health_.recovered(frame.utime);
+  trusted_.clear();
+  os << "recovered: the scan registered against the map " << (x.p_world_imu - xc.p_world_imu).norm()
+     << " m from the lost estimate (" << res.matched << " points matched)";
+  r.health.reason = os.str();
+  r.health.state = HealthState::Degraded;
+  ++recoveries_;
+  return true;
 }
 
 }  // namespace livo

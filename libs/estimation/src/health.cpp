@@ -1,6 +1,8 @@
 #include "livo/estimation/health.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <iomanip>
 #include <sstream>
 
@@ -8,7 +10,7 @@ namespace livo {
 
 void HealthConfig::load(const ConfigNode& health) {
   health.get("correction_chi2_max", correction_chi2_max).get("min_match_share", min_match_share);
-  health.get("window_s", window_s).get("max_speed_mps", max_speed_mps);
+  health.get("window_s", window_s).get("max_speed_mps", max_speed_mps).get("recover", recover);
   health.check(correction_chi2_max > 0, "correction_chi2_max", "must be > 0");
   health.check(min_match_share >= 0 && min_match_share <= 1, "min_match_share", "must be in [0, 1]");
   health.check(window_s > 0, "window_s", "must be > 0");
@@ -23,6 +25,31 @@ const char* healthName(HealthState s) {
     case HealthState::Lost: return "lost";
   }
   return "unknown";
+}
+
+void HealthMonitor::recovered(Utime t) {
+  lost_ = false;
+  window_.clear();
+  shares_.clear();
+  lost_span_ = {-1, -1};
+  last_inconsistent_ = t;
+}
+
+double HealthMonitor::referenceShare() const {
+  if (shares_.size() < 3) return -1.0;
+  std::vector<double> v;
+  v.reserve(shares_.size());
+  for (const auto& s : shares_) v.push_back(s.second);
+  std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+bool HealthMonitor::inconsistentUpdate(const HealthInputs& in) const {
+  if (!in.update_ran) return false;
+  if (in.correction_chi2 > cfg_.correction_chi2_max) return true;
+  const double ref = referenceShare();
+  return in.n_covered >= in.min_matches && ref > 0 &&
+         double(in.n_matched) < cfg_.min_match_share * ref * double(in.n_covered);
 }
 
 FrameHealth HealthMonitor::assess(const HealthInputs& in) {
@@ -43,12 +70,14 @@ FrameHealth HealthMonitor::assess(const HealthInputs& in) {
     h.inconsistent = true;
     add("LiDAR correction chi2 ", in.correction_chi2, " above ", cfg_.correction_chi2_max);
   }
-  if (in.update_ran && in.n_covered >= in.min_matches &&
-      double(in.n_matched) < cfg_.min_match_share * double(in.n_covered)) {
+  const double ref = referenceShare();
+  if (in.update_ran && in.n_covered >= in.min_matches && ref > 0 &&
+      double(in.n_matched) < cfg_.min_match_share * ref * double(in.n_covered)) {
     h.inconsistent = true;
-    add("matched ", in.n_matched, " of ", in.n_covered, " covered points");
+    add("matched ", in.n_matched, " of ", in.n_covered, " covered points (usually ", ref, ")");
   }
-  if (in.lidar_failed) add(in.visual_used ? "LiDAR update failed (camera used)" : "LiDAR update failed (IMU only)");
+  if (in.repeated_sweep) add("the sweep repeats the previous one point for point (a frozen LiDAR): not used");
+  else if (in.lidar_failed) add(in.visual_used ? "LiDAR update failed (camera used)" : "LiDAR update failed (IMU only)");
   h.inconsistent = h.inconsistent || speed_out;
 
   // The persistence rule over the last window_s seconds.
@@ -58,6 +87,10 @@ FrameHealth HealthMonitor::assess(const HealthInputs& in) {
   std::size_t bad = 0;
   for (const auto& w : window_) bad += w.second;
   if (h.inconsistent) last_inconsistent_ = in.utime;
+  if (!h.inconsistent && in.update_ran && in.n_covered >= in.min_matches) {
+    shares_.emplace_back(in.utime, double(in.n_matched) / double(in.n_covered));
+    while (shares_.front().first <= in.utime - 4 * window) shares_.pop_front();
+  }
   if (speed_out || (bad >= 3 && 2 * bad >= window_.size())) {
     if (!lost_) {  // the span starts at the first inconsistent frame of the window
       lost_since_ = in.utime;

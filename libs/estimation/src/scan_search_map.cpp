@@ -84,7 +84,7 @@ void SearchMap::addPoints(const std::vector<Vec3>& world) {
   for (const NormalPatch& np : planarPatches(world, voxel_m_, patch_eigen_)) addNormal(np.center, np.normal, np.weight);
 }
 
-void SearchMap::addPlanes(const VoxelMap& map, const Vec3& center, double radius_m) {
+void SearchMap::addPlanes(const PlaneFinder& map, const Vec3& center, double radius_m) {
   const double h = pyramid_.cellSize(0);
   const double s = map.rootVoxelSize();
   const double gate = map.sigmaNum();

@@ -85,6 +85,11 @@ void PlaneIndex::visitPlanes(const VoxelKey& key, const std::function<void(const
   for (const Plane& plane : it->second) f(plane);
 }
 
+void PlaneIndex::forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const {
+  for (const auto& [key, planes] : voxels_)
+    for (const Plane& plane : planes) f(key, plane);
+}
+
 void CachedAssociation::Candidates::fetch(const PlaneFinder& finder, const VoxelKey& key) {
   n = 0;
   finder.visitPlanes(key, [&](const Plane& plane) {

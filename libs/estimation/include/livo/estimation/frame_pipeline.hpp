@@ -29,6 +29,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <deque>
 
 namespace livo {
 
@@ -58,6 +59,8 @@ class FramePipeline {
   const ImageCheckCounters& imageCounters() const { return image_counters_; }
   /// camera.estimate_time_offset: times t_d left 3 prior sigmas and was reset to the prior.
   std::size_t timeOffsetResets() const { return time_offset_resets_; }
+  /// Lost spans the filter recovered from (restarted at a pose registered against the map).
+  std::size_t recoveries() const { return recoveries_; }
 
  private:
   /// The frame's image at the processing scale in `scratch` or the frame itself; null without a
@@ -68,6 +71,27 @@ class FramePipeline {
   /// Step 6 on `gray`, the frame's image at the processing scale (`lidar_failed`: retrieval from the
   /// camera frustum instead of the scan).
   void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r, bool lidar_failed);
+  /// Step 8: the health checks on the frame (health.hpp), and from `lost` the recovery: the frame's
+  /// scan registered against the map around the last trusted pose carried on at its velocity, and
+  /// on success the filter restarted there (docs/algorithms.md section 10).
+  void healthStep(const Frame& frame, MapAccess& map, FrameResult& r);
+  bool recover(const Frame& frame, MapAccess& map, FrameResult& r);
+  /// What the health checks read of the frame's result.
+  HealthInputs healthInputs(const FrameResult& r) const;
+  /// The sweep repeats the previous frame's point for point (remembers this one's fingerprint).
+  bool repeatsLastSweep(const LidarScan& sweep);
+  std::uint64_t last_sweep_hash_ = 0;
+  std::size_t last_sweep_size_ = 0;
+
+  /// The filter after the frames whose state was ok, the last 2 s of them (a recovery starts from
+  /// the last one at least health.window_s before the lost span's first inconsistent frame: the
+  /// frames just before it may carry the fault already).
+  struct Trusted {
+    NavState x;
+    StateCov P = StateCov::Zero();
+  };
+  std::deque<Trusted> trusted_;
+  Utime last_recovery_try_ = -1;
 
   PipelineConfig cfg_;
   Esikf filter_;  ///< the one filter state; lio_ and visualStep act on it
@@ -80,6 +104,7 @@ class FramePipeline {
   VignettingCorrection vignetting_;  ///< camera.vignetting (inactive at 0)
   ImageCheckCounters image_counters_;
   std::size_t time_offset_resets_ = 0;
+  std::size_t recoveries_ = 0;
 };
 
 }  // namespace livo

@@ -49,6 +49,11 @@ struct FrameResult {
   /// visual update (if the camera can) carries the estimate.
   bool lidar_failed = false;
   bool map_seeded = false;
+  /// The frame's sweep repeats the previous one point for point (a frozen or replaying LiDAR driver):
+  /// its points are not used (the frame counts as a LiDAR failure).
+  bool repeated_sweep = false;
+  /// The LiDAR update failed a consistency check (health.hpp): the scan stayed out of the map.
+  bool scan_withheld = false;
   FrameHealth health;  ///< the filter's consistency checks and the frame's state (health.hpp)  ///< the LiDAR update failed with nothing around in the map: the scan seeded it
   bool lidarFailed() const { return lidar_failed; }
 };

@@ -205,7 +205,7 @@ class SearchMap {
   /// Every plane leaf of `map` (within `radius_m` of `center`; radius <= 0: all), sampled at the
   /// finest cell on its plane inside its octree cell: for a map whose points are gone (frozen
   /// leaves), e.g. a lost filter's map. Non-plane leaves are not represented.
-  void addPlanes(const VoxelMap& map, const Vec3& center = Vec3::Zero(), double radius_m = 0.0);
+  void addPlanes(const PlaneFinder& map, const Vec3& center = Vec3::Zero(), double radius_m = 0.0);
   void clear();
   bool empty() const { return pyramid_.empty(); }
   const OccupancyPyramid& pyramid() const { return pyramid_; }

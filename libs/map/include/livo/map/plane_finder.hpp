@@ -45,6 +45,8 @@ class PlaneFinder {
   /// Calls f(plane) for every plane of root voxel `key`, in findBestPlane's order (nothing when the
   /// voxel does not exist). Plane addresses stay valid until the map changes.
   virtual void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const = 0;
+  /// Calls f(root key, plane) for every plane the map holds (any order).
+  virtual void forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const = 0;
 };
 
 /// One point's association across the iterations of an update against a map that does not change
@@ -100,6 +102,7 @@ class PlaneIndex : public PlaneFinder {
   double rootVoxelSize() const override { return voxel_size_; }
   double sigmaNum() const override { return sigma_num_; }
   void visitPlanes(const VoxelKey& key, const std::function<void(const Plane&)>& f) const override;
+  void forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const override;
   std::size_t numPlanes() const { return planes_; }
   std::size_t numVoxels() const { return voxels_.size(); }
   double voxelSize() const { return voxel_size_; }

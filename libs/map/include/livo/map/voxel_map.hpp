@@ -78,7 +78,7 @@ class VoxelMap : public PlaneFinder {
   VoxelMapStats stats() const;
 
   /// Calls f(key of the root voxel, plane) for every plane leaf.
-  void forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const;
+  void forEachPlane(const std::function<void(const VoxelKey&, const Plane&)>& f) const override;
 
   /// Calls f(plane, octant path) for every plane leaf of one root voxel (nothing when it does not
   /// exist). The path holds the child index per layer below the root, -1 beyond the leaf's layer.
