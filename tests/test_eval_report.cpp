@@ -225,13 +225,14 @@ TEST(LivoReport, HealthTimelineDrawsEveryStateInProportion) {
   fs::create_directories(dir / "run");
   std::ofstream csv(dir / "run" / "frames.csv");
   csv << "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
-         "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state\n";
+         "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state,reason\n";
   std::ofstream tum(dir / "run" / "trajectory.tum");
   for (int i = 0; i < 100; ++i) {
     const double t = 50.0 + 0.1 * i;
-    const char* state = i < 10 ? "initialising" : i < 60 ? "ok" : i < 70 ? "lidar_failed" : i < 90 ? "imu_only" : "ok";
+    const char* state = i < 10 ? "initialising" : i < 60 ? "ok" : i < 70 ? "degraded" : i < 90 ? "lost" : "ok";
     const bool visual = i >= 60 && i < 70;
-    csv << t << ",5,0,6,0.3,0," << visual << ",1000,900,0,0,0,nan,nan," << state << "\n";
+    csv << t << ",5,0,6,0.3,0," << visual << ",1000,900,0,0,0,nan,nan," << state << ","
+        << (i >= 60 && i < 90 ? "LiDAR correction chi2 85 above 22.5" : "") << "\n";
     if (i >= 10) tum << t << " " << 0.1 * i << " 0 0 0 0 0 1\n";
   }
   csv.close();
@@ -239,12 +240,13 @@ TEST(LivoReport, HealthTimelineDrawsEveryStateInProportion) {
   std::ofstream(dir / "run" / "stats.json")
       << R"({"frames": 100, "visual_mode": "adaptive", "map_mode": "hybrid",
             "health": {"first_pose_delay_s": 1, "initialising_s": 1, "lidar_failed_s": 3, "imu_only_s": 2,
-                       "degenerate_s": 0, "longest_pose_gap_s": 0.1}})";
+                       "degenerate_s": 0, "degraded_s": 1, "lost_s": 2, "lost_spans": 1,
+                       "longest_pose_gap_s": 0.1}})";
   std::string out;
   ASSERT_EQ(run(kReport + " " + (dir / "run").string(), out, dir.string()), 0) << out;
   const std::string md = slurp((dir / "run" / "report" / "README.md").string());
   EXPECT_NE(md.find("| health | first pose 1.00 s after the first frame; initialising 1.0 s, LiDAR failed 3.0 s, "
-                    "IMU only 2.0 s, degenerate 0.0 s; longest pose gap 0.10 s |"),
+                    "IMU only 2.0 s, degenerate 0.0 s, degraded 1.0 s, lost 2.0 s (1 spans); longest pose gap 0.10 s |"),
             std::string::npos)
       << md;
   EXPECT_NE(md.find("![health](health.png)"), std::string::npos) << md;
@@ -255,11 +257,11 @@ TEST(LivoReport, HealthTimelineDrawsEveryStateInProportion) {
   const double failed = double(countColour(img, 0xdd, 0x84, 0x52)), imu = double(countColour(img, 0xc4, 0x4e, 0x52));
   ASSERT_GT(init, 0.0);
   ASSERT_GT(failed, 0.0);
-  std::cout << "health.png pixels: initialising " << init << ", ok " << ok << ", lidar failed " << failed
-            << ", imu only " << imu << "\n";
+  std::cout << "health.png pixels: initialising " << init << ", ok " << ok << ", degraded " << failed
+            << ", lost " << imu << "\n";
   // Each count is a bar's length times its height plus the legend's swatch (the same for every state):
   // differences cancel the swatch.
-  EXPECT_NEAR((ok - init) / (imu - init), 5.0, 0.5) << "60 frames ok, 20 on the IMU alone, 10 initialising";
+  EXPECT_NEAR((ok - init) / (imu - init), 5.0, 0.5) << "60 frames ok, 20 lost, 10 initialising";
   EXPECT_NEAR(failed / init, 1.0, 0.1) << "10 frames each";
   fs::remove_all(dir);
 }

@@ -46,7 +46,7 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
     const std::string csv = slurp(out / "frames.csv");
     EXPECT_EQ(csv.substr(0, csv.find('\n')),
               "t,lio_ms,vio_ms,total_ms,sigma_min,degenerate,visual_used,n_points,n_planes_matched,n_visual_points,"
-              "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state");
+              "map_bytes,n_longterm_points,time_offset_s,time_offset_sigma_s,state,reason");
     const std::vector<double> map_bytes = livo::test::csvColumn(out / "frames.csv", "map_bytes");
     ASSERT_FALSE(map_bytes.empty());
     EXPECT_GT(map_bytes.back(), 0.0);  // the map's bytes after the last frame

@@ -1,4 +1,4 @@
-// Never silently lost (docs/algorithms.md section 10): faults of the simulator (config/sim/README.md:
+// Never silently lost (docs/algorithms.md section 12): faults of the simulator (config/sim/README.md:
 // imu.fault_s, lidar.freeze_s) injected into the demo, end to end in one process against the ground
 // truth. A diverging run must say `lost` within 0.5 s of its position error passing 0.5 m, a frozen
 // LiDAR is recognised and left out, and the undisturbed demo has no frame out of `ok`.

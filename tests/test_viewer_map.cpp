@@ -212,6 +212,14 @@ TEST(ViewerScene, ClipsAboveTheTrajectoryColoursByModeAndCountsFrames) {
   EXPECT_NE(text2.find("frame 12.5 ms"), std::string::npos) << text2;
   EXPECT_NE(text2.find("sigma_min 0.042   DEGENERATE"), std::string::npos) << text2;
   EXPECT_NE(text2.find("map server 3.0 MiB of 512 MiB cap"), std::string::npos) << text2;
+  EXPECT_EQ(text2.find("LOST"), std::string::npos) << text2;
+  InboxBatch b3;
+  f.health = 3;
+  f.health_reason = "matched 3 of 900 covered points (usually 0.93)";
+  b3.frame_stats.push_back(f);
+  scene.apply(b3);
+  const std::string text3 = overlayText(scene.overlay("live", ViewMode::kFollow, ColourMode::kHeight));
+  EXPECT_NE(text3.find("LOST (do not navigate on this pose): matched 3 of 900"), std::string::npos) << text3;
 
   scene.clear();
   EXPECT_EQ(scene.map().size(), 0u);

@@ -44,14 +44,6 @@ double HealthMonitor::referenceShare() const {
   return v[v.size() / 2];
 }
 
-bool HealthMonitor::inconsistentUpdate(const HealthInputs& in) const {
-  if (!in.update_ran) return false;
-  if (in.correction_chi2 > cfg_.correction_chi2_max) return true;
-  const double ref = referenceShare();
-  return in.n_covered >= in.min_matches && ref > 0 &&
-         double(in.n_matched) < cfg_.min_match_share * ref * double(in.n_covered);
-}
-
 FrameHealth HealthMonitor::assess(const HealthInputs& in) {
   FrameHealth h;
   if (!in.initialized) return h;

@@ -26,6 +26,8 @@ ViewerNode::ViewerNode(LcmNode& lcm, const ChannelConfig& channels, viewer::Inbo
     f.degenerate = s.degenerate;
     f.visual_used = s.visual_used;
     f.map_timeout = s.map_timeout;
+    f.health = s.health;
+    f.health_reason = s.health_reason;
     inbox_.pushFrameStats(f);
   });
   lcm_.subscribeStruct<livo::map_stats_t, MapStats>(channels.map_stats, [this](MapStats& m) {

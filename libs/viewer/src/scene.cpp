@@ -39,6 +39,9 @@ std::string overlayText(const OverlayData& d) {
     s += fmt("frame %.1f ms (lidar %.1f, visual %.1f)", f.total_ms, f.lio_ms, f.vio_ms) +
          fmt("   sigma_min %.3f", f.sigma_min) + (f.degenerate ? "   DEGENERATE" : "") +
          (f.visual_used ? "   visual update" : "") + (f.map_timeout ? "   MAP TIMEOUT" : "") + "\n";
+    if (f.health == 2 || f.health == 3)  // the state and its reason, cut to one line
+      s += std::string(f.health == 3 ? "LOST (do not navigate on this pose): " : "degraded: ") +
+           f.health_reason.substr(0, 100) + "\n";
   }
   if (d.map) {
     s += fmt("map server %.1f MiB", double(d.map->bytes) / (1024.0 * 1024.0));

@@ -73,7 +73,7 @@ class FramePipeline {
   void visualStep(const Frame& frame, const Image& gray, MapAccess& map, FrameResult& r, bool lidar_failed);
   /// Step 8: the health checks on the frame (health.hpp), and from `lost` the recovery: the frame's
   /// scan registered against the map around the last trusted pose carried on at its velocity, and
-  /// on success the filter restarted there (docs/algorithms.md section 10).
+  /// on success the filter restarted there (docs/algorithms.md section 12).
   void healthStep(const Frame& frame, MapAccess& map, FrameResult& r);
   bool recover(const Frame& frame, MapAccess& map, FrameResult& r);
   /// What the health checks read of the frame's result.

@@ -52,7 +52,7 @@ struct FrameResult {
   /// The frame's sweep repeats the previous one point for point (a frozen or replaying LiDAR driver):
   /// its points are not used (the frame counts as a LiDAR failure).
   bool repeated_sweep = false;
-  /// The LiDAR update failed a consistency check (health.hpp): the scan stayed out of the map.
+  /// health.recover and the filter was lost: the scan stayed out of the map.
   bool scan_withheld = false;
   FrameHealth health;  ///< the filter's consistency checks and the frame's state (health.hpp)  ///< the LiDAR update failed with nothing around in the map: the scan seeded it
   bool lidarFailed() const { return lidar_failed; }

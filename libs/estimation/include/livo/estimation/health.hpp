@@ -1,4 +1,4 @@
-// The filter's own health, every frame (docs/algorithms.md section 10): consistency checks whose
+// The filter's own health, every frame (docs/algorithms.md section 12): consistency checks whose
 // bounds follow from the configured noise, and the frame's state from them: initialising, ok,
 // degraded (a check is outside its bound: the pose is kept and flagged) or lost (the checks fail
 // persistently: the estimate is not trusted).
@@ -35,7 +35,7 @@ struct HealthConfig {
   /// trusted pose carried on at its velocity and restart the filter there (at most once per
   /// window_s). On the demo with an IMU fault it registers in the symmetric room to poses 0.4-0.8 m
   /// off, the first update after the restart takes a velocity jump and the run diverges again
-  /// (docs/algorithms.md section 10, 2026-12-07).
+  /// (docs/algorithms.md section 12, 2026-12-07).
   bool recover = false;
 
   /// Reads the `health` section (optional; every key has a default).
@@ -75,11 +75,8 @@ class HealthMonitor {
  public:
   explicit HealthMonitor(HealthConfig cfg = {}) : cfg_(cfg) {}
   FrameHealth assess(const HealthInputs& in);
-  /// The LiDAR update of `in` fails the correction or the match-share check (what assess() calls an
-  /// inconsistent update; the pipeline keeps such a scan out of the map).
-  bool inconsistentUpdate(const HealthInputs& in) const;
   const HealthConfig& config() const { return cfg_; }
-  /// The state of the last assessed frame is lost (its scans must stay out of the map).
+  /// The state of the last assessed frame is lost (with health.recover its scans stay out of the map).
   bool lost() const { return lost_; }
   /// The first inconsistent frame of the current lost span (-1 when not lost).
   Utime lostSince() const { return lost_ ? lost_since_ : -1; }

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace livo::viewer {
@@ -33,6 +34,9 @@ struct FrameStatsInput {
   float total_ms = 0.f, lio_ms = 0.f, vio_ms = 0.f;
   float sigma_min = 0.f;
   bool degenerate = false, visual_used = false, map_timeout = false;
+  /// The filter's health (estimator_stats_t.health: 0 initialising, 1 ok, 2 degraded, 3 lost) and why.
+  int health = 1;
+  std::string health_reason;
 };
 
 /// Map server health (LIVO_MAP_STATS).
