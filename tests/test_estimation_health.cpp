@@ -29,9 +29,11 @@ HealthInputs consistent(double t) {
   return in;
 }
 
+/// The LiDAR moved the pose 30 cm where the IMU's prediction admitted a few (chi2 200).
 HealthInputs inconsistent(double t) {
   HealthInputs in = consistent(t);
   in.correction_chi2 = 200.0;
+  in.correction_m = 0.3;
   return in;
 }
 
@@ -90,6 +92,18 @@ TEST(Health, EachCheckOutOfItsBoundDegradesTheFrameAndSaysWhy) {
   EXPECT_NE(h.reason.find("camera used"), std::string::npos);
   // The reason is one CSV field.
   EXPECT_EQ(h.reason.find(','), std::string::npos);
+  // An overconfident filter still on the map: chi2 out of bound, but a correction (1 cm) below the
+  // planes' accuracy (5 cm) is degraded and never lost, however long it lasts.
+  HealthMonitor sure;
+  for (int k = 1; k <= 30; ++k) {
+    HealthInputs in = consistent(0.1 * k);
+    in.correction_chi2 = 60.0;
+    in.correction_m = 0.01;
+    const FrameHealth f = sure.assess(in);
+    EXPECT_EQ(f.state, HealthState::Degraded) << k;
+    EXPECT_FALSE(f.inconsistent);
+    EXPECT_NE(f.reason.find("(1 cm)"), std::string::npos) << f.reason;
+  }
   // Isolated flags never make a lost span.
   for (int k = 5; k < 40; ++k) EXPECT_NE(m.assess(k % 6 ? consistent(0.1 * k) : inconsistent(0.1 * k)).state, HealthState::Lost);
 }

@@ -208,6 +208,8 @@ HealthInputs FramePipeline::healthInputs(const FrameResult& r) const {
   h.n_covered = r.lio.n_covered;
   h.min_matches = cfg_.lio.min_matches;
   h.correction_chi2 = r.lio.correction_chi2;
+  h.correction_m = r.lio.correction_m;
+  h.plane_sigma_m = std::sqrt(cfg_.lio.lio.range_noise_m * cfg_.lio.lio.range_noise_m + cfg_.lio.map.min_eigen_value);
   h.lidar_failed = r.lidar_failed;
   h.repeated_sweep = r.repeated_sweep;
   h.visual_used = r.visual_used;
@@ -237,7 +239,7 @@ bool FramePipeline::repeatsLastSweep(const LidarScan& sweep) {
 
 void FramePipeline::healthStep(const Frame& frame, MapAccess& map, FrameResult& r) {
   r.health = health_.assess(healthInputs(r));
-  if (r.health.state == HealthState::Ok) {
+  if (r.health.state == HealthState::Ok && cfg_.health.recover) {  // only the recovery reads them
     trusted_.push_back(Trusted{filter_.x(), filter_.P()});
     while (trusted_.size() > 1 && toSeconds(trusted_.back().x.utime - trusted_.front().x.utime) > 2.0) trusted_.pop_front();
   }

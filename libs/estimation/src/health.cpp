@@ -59,8 +59,9 @@ FrameHealth HealthMonitor::assess(const HealthInputs& in) {
     add("speed ", in.speed_mps, " m/s above ", cfg_.max_speed_mps);
   }
   if (in.update_ran && in.correction_chi2 > cfg_.correction_chi2_max) {
-    h.inconsistent = true;
-    add("LiDAR correction chi2 ", in.correction_chi2, " above ", cfg_.correction_chi2_max);
+    h.inconsistent = in.correction_m > in.plane_sigma_m;
+    add("LiDAR correction chi2 ", in.correction_chi2, " above ", cfg_.correction_chi2_max, " (", 100.0 * in.correction_m,
+        " cm)");
   }
   const double ref = referenceShare();
   if (in.update_ran && in.n_covered >= in.min_matches && ref > 0 &&

@@ -55,6 +55,10 @@ struct HealthInputs {
   int n_covered = 0;          ///< points in map voxels holding a plane
   int min_matches = 20;       ///< lio.min_matches: fewer covered points say nothing about the fit
   double correction_chi2 = 0.0;
+  double correction_m = 0.0;  ///< the position part of the LiDAR's correction, m
+  /// The map's planes' own accuracy, sqrt(lidar.range_noise_m^2 + voxel_map.min_eigen_value), m: a
+  /// correction below it is no evidence that the pose left the map (it stays a degraded frame).
+  double plane_sigma_m = 0.05;
   bool lidar_failed = false;  ///< the LiDAR update failed where the map should have matched
   bool repeated_sweep = false;  ///< the sweep repeats the previous one point for point (a frozen LiDAR)
   bool visual_used = false;
@@ -63,7 +67,11 @@ struct HealthInputs {
 
 struct FrameHealth {
   HealthState state = HealthState::Initialising;
-  bool inconsistent = false;  ///< this frame failed a consistency check (correction, match share, speed)
+  /// This frame failed a consistency check that counts towards `lost`: the match share, the speed, or
+  /// the correction's chi-square with a correction larger than the planes' accuracy. (A chi-square
+  /// out of bound with a smaller correction, an overconfident filter that is still on the map, makes
+  /// the frame degraded only.)
+  bool inconsistent = false;
   /// What put the frame out of ok: ';'-separated, no commas (a CSV field); empty when ok.
   std::string reason;
 };
