@@ -218,17 +218,20 @@ HealthInputs FramePipeline::healthInputs(const FrameResult& r) const {
 }
 
 bool FramePipeline::repeatsLastSweep(const LidarScan& sweep) {
-  // A fingerprint of the sweep's points as a set (a sum of per-point FNV-1a hashes over coordinates
-  // and intensity: a frame cut at image times from a repeated scan holds the same points in another
-  // order). A real sweep never repeats to the bit (range noise); a frozen driver's does.
+  // A fingerprint of the sweep's points as a set (a sum of per-point hashes of the coordinates' and
+  // intensity's bits: a frame cut at image times from a repeated scan holds the same points in
+  // another order). A real sweep never repeats to the bit (range noise); a frozen driver's does.
+  const auto bits = [](float v) {
+    std::uint32_t u;
+    std::memcpy(&u, &v, sizeof u);
+    return std::uint64_t(u);
+  };
   std::uint64_t sum = 0;
   for (const auto& p : sweep.points) {
-    std::uint64_t h = 1469598103934665603ull;
-    for (const float v : {p.p_lidar.x(), p.p_lidar.y(), p.p_lidar.z(), p.intensity}) {
-      std::uint32_t u;
-      std::memcpy(&u, &v, sizeof u);
-      for (int k = 0; k < 4; ++k) h = (h ^ ((u >> (8 * k)) & 0xffu)) * 1099511628211ull;
-    }
+    const std::uint64_t a = bits(p.p_lidar.x()) | bits(p.p_lidar.y()) << 32;
+    const std::uint64_t b = bits(p.p_lidar.z()) | bits(p.intensity) << 32;
+    std::uint64_t h = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
+    h ^= h >> 29;
     sum += h;
   }
   const bool repeat = !sweep.points.empty() && sum == last_sweep_hash_ && sweep.points.size() == last_sweep_size_;
