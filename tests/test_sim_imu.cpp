@@ -226,3 +226,32 @@ TEST(SimImu, VibrationAboveNyquistAliasesAtItsAmplitude) {
     }
   }
 }
+
+// imu.fault_s + fault_accel_mps2: inside the interval the accelerometer reads the jump more (body frame)
+// and the ground truth's accel bias says so; outside, the samples are the fault-free ones.
+TEST(SimImu, AnAccelerometerFaultComesAndGoes) {
+  SimScenario sc = makeScenario("room");
+  sc.duration_s = 3.0;
+  const auto samples = [](const SimScenario& s) {
+    std::vector<std::pair<ImuSample, ImuTruth>> out;
+    Simulator sim(s);
+    sim.run({[&](const ImuSample& m, const ImuTruth& t) { out.emplace_back(m, t); }, nullptr, nullptr});
+    return out;
+  };
+  const auto clean = samples(sc);
+  sc.imu.fault_s = {1.0, 1.5};
+  sc.imu.fault_accel_mps2 = Vec3(4.0, 0.0, -1.0);
+  const auto faulty = samples(sc);
+  ASSERT_EQ(clean.size(), faulty.size());
+  std::size_t inside = 0;
+  for (std::size_t k = 0; k < clean.size(); ++k) {
+    const double t = toSeconds(clean[k].first.utime - clean.front().first.utime);
+    const Vec3 d = faulty[k].first.accel - clean[k].first.accel;
+    const bool in = t >= 1.0 && t < 1.5;
+    inside += in;
+    EXPECT_NEAR((d - (in ? sc.imu.fault_accel_mps2 : Vec3::Zero())).norm(), 0.0, 1e-9) << t;
+    EXPECT_NEAR((faulty[k].second.accel_bias - clean[k].second.accel_bias - (in ? sc.imu.fault_accel_mps2 : Vec3::Zero())).norm(), 0.0, 1e-12);
+    EXPECT_EQ(faulty[k].first.gyro, clean[k].first.gyro);
+  }
+  EXPECT_EQ(inside, 100u);  // 0.5 s at 200 Hz
+}

@@ -75,3 +75,22 @@ TEST(SimLidar, BlindMaxRangeAndGrazingReturnsAreDropped) {
     ASSERT_GE(dir_world.x(), std::cos(30.0 * kPi / 180.0) - 1e-6);
   }
 }
+
+// lidar.freeze_s: every scan starting inside the interval repeats the points of the last scan before
+// it, stamped with its own time; the scans around it are the simulator's own.
+TEST(SimLidar, AFrozenLidarRepeatsItsLastScan) {
+  SimScenario sc = makeScenario("room", "avia");
+  sc.lidar.freeze_s = {3.0, 3.5};
+  Simulator frozen(sc);
+  const LidarScan before = frozen.lidarScan(29);  // 2.9 s: the last scan before the freeze
+  for (std::int64_t j = 30; j < 35; ++j) {
+    const LidarScan s = frozen.lidarScan(j);
+    EXPECT_EQ(s.utime, frozen.startUtime() + j * 100'000);
+    ASSERT_EQ(s.points.size(), before.points.size()) << j;
+    for (std::size_t i = 0; i < s.points.size(); i += 97) ASSERT_EQ(s.points[i].p_lidar, before.points[i].p_lidar) << j;
+  }
+  const LidarScan after = frozen.lidarScan(35);  // 3.5 s: the freeze is over
+  const LidarScan own = Simulator(makeScenario("room", "avia")).lidarScan(35);
+  ASSERT_EQ(after.points.size(), own.points.size());
+  for (std::size_t i = 0; i < own.points.size(); i += 97) EXPECT_EQ(after.points[i].p_lidar, own.points[i].p_lidar);
+}

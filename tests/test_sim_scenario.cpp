@@ -79,6 +79,10 @@ TEST(SimScenario, UnknownKeysAndBadValuesNameTheKey) {
   EXPECT_NE(message("imu:\n  rate_hz: abc\n").find("imu.rate_hz"), std::string::npos);
   EXPECT_NE(message("rig_map:\n  local_edge_m: -40\n").find("rig_map.local_edge_m"), std::string::npos);
   EXPECT_NE(message("rig_map:\n  slide_m: 4\n").find("rig_map.slide_m"), std::string::npos);
+  // The faults (off by default): intervals in pairs, a finite bias jump.
+  EXPECT_NE(message("imu:\n  fault_s: [1.0]\n").find("imu.fault_s"), std::string::npos);
+  EXPECT_NE(message("lidar:\n  freeze_s: [2.0, 1.0]\n").find("lidar.freeze_s"), std::string::npos);
+  EXPECT_NE(message("imu:\n  fault_accel_mps2: [1e9, 0, 0]\n").find("imu.fault_accel_mps2"), std::string::npos);
   EXPECT_EQ(message("seed: 3\nworld:\n  kind: wall\n"), "no error");
 }
 
