@@ -48,7 +48,7 @@ void applyStats(FrameRecord& rec, const EstimatorStats& s) {
   rec.has_time_offset = s.has_time_offset;
   rec.time_offset_s = s.time_offset_s;
   rec.time_offset_sigma_s = s.time_offset_sigma_s;
-  rec.health = s.health;
+  rec.health = static_cast<HealthState>(s.health);  // 0..3: fromMsg checked it
   rec.health_reason = s.health_reason;
 }
 

@@ -12,6 +12,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace livo {
 
@@ -54,12 +55,9 @@ void writeSummary(std::ostream& os, const char* name, const SampleSummary& s, bo
 }  // namespace
 
 const char* frameState(const FrameRecord& f) {
-  if (!f.has_pose) return "initialising";
-  switch (f.health) {
-    case 2: return "degraded";
-    case 3: return "lost";
-    default: return f.lidar_failed ? "degraded" : "ok";  // 0/1: a record without the filter's health
-  }
+  if (!f.has_pose) return healthName(HealthState::Initialising);
+  if (f.health == HealthState::Ok && f.lidar_failed) return healthName(HealthState::Degraded);  // a record without the checks
+  return healthName(f.health == HealthState::Initialising ? HealthState::Ok : f.health);
 }
 
 namespace {
@@ -147,8 +145,8 @@ void RunHealth::addFrame(const FrameRecord& f) {
   if (first_ < 0) first_ = t;
   const double dt = prev_ >= 0 && t > prev_ ? toSeconds(t - prev_) : 0.0;
   prev_ = std::max(prev_, t);
-  const std::string state = frameState(f);
-  const bool lost = state == "lost";
+  const std::string_view state = frameState(f);
+  const bool lost = state == healthName(HealthState::Lost);
   if (lost && !prev_lost_) {
     ++lost_spans;
     if (first_lost_t < 0) first_lost_t = toSeconds(t);
@@ -164,8 +162,8 @@ void RunHealth::addFrame(const FrameRecord& f) {
   if (lidar_failed) lidar_failed_s += dt;
   if (lidar_failed && !visual_used) imu_only_s += dt;
   if (degenerate) degenerate_s += dt;
-  if (state == "ok") ++frames_ok;
-  if (state == "degraded") ++frames_degraded, degraded_s += dt;
+  if (state == healthName(HealthState::Ok)) ++frames_ok;
+  if (state == healthName(HealthState::Degraded)) ++frames_degraded, degraded_s += dt;
   if (lost) ++frames_lost, lost_s += dt;
 }
 

@@ -21,6 +21,7 @@
 
 #include "livo/common/so3.hpp"
 #include "livo/common/types.hpp"
+#include "livo/estimation/health.hpp"
 #include "livo/eval/tum.hpp"
 
 #include <cstdint>
@@ -55,9 +56,9 @@ struct FrameRecord {
   /// initialised. livo-run: the map's O(1) estimate with a memory cap, else an exact count every few
   /// frames carried forward (processes/livo-run/main.cpp).
   std::uint64_t map_bytes = 0;
-  /// The filter's health (estimator_stats_t.health): 0 initialising, 1 ok, 2 degraded, 3 lost, and
-  /// why (frames.csv's state and reason columns; the reason is not kept past the row).
-  std::int8_t health = 1;
+  /// The filter's health (estimator_stats_t.health) and why (frames.csv's state and reason columns;
+  /// the reason is not kept past the row).
+  HealthState health = HealthState::Ok;
   std::string health_reason;
 };
 
