@@ -251,6 +251,23 @@ TEST(Timing, PeakRssIsReadAndGrowsWithTouchedMemory) {
   EXPECT_GE(peakRssBytes(), before + (32u << 20)) << static_cast<int>(big[12345]);
 }
 
+// fromSeconds is an inline copy of std::llround's rounding (halves away from zero): the oracle is llround
+// itself, on halves, negatives, float offsets as stored in LidarPoint, huge values and NaN.
+TEST(Types, FromSecondsRoundsAsLlround) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> wide(-1e7, 1e7);
+  std::uniform_real_distribution<float> offset(-0.2f, 0.2f);
+  std::vector<double> xs = {0.0, -0.0, 0.5e-6, -0.5e-6, 1.5e-6, -1.5e-6, 2.5e-6, 0.49999999999999994e-6,
+                            1.2345675, -1.2345675, 4.5e12, -4.5e12, 1e13, 9.1e12, -9.3e12, 1e300, -1e300};
+  for (int i = 0; i < 200000; ++i) {
+    xs.push_back(wide(rng));
+    xs.push_back(static_cast<double>(offset(rng)));
+    xs.push_back(std::floor(wide(rng)) * 1e-6 + 0.5e-6);  // exact halves of a microsecond (up to s * 1e6 rounding)
+  }
+  for (double x : xs) ASSERT_EQ(fromSeconds(x), static_cast<Utime>(std::llround(x * 1e6))) << x;
+  EXPECT_EQ(fromSeconds(std::nan("")), static_cast<Utime>(std::llround(std::nan(""))));
+}
+
 TEST(Types, TimeConversionsAndScanEnd) {
   EXPECT_EQ(fromSeconds(1.2345675), 1234568);
   LidarScan s;

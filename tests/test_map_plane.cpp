@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <iostream>
 #include <random>
@@ -91,6 +93,55 @@ TEST(PlaneFit, RecoversKnownPlaneFarFromOrigin) {
   EXPECT_FALSE(fitPlane(blob, 0.0025, p));
   EXPECT_FALSE(fitPlane(line, 0.0025, p));
   EXPECT_FALSE(fitPlane(two, 0.0025, p));
+}
+
+// Sigma_nq against the explicit first-order formula, J_i = [U F_i; I/N] formed as 6x3 matrices and
+// sum_i J_i Sigma_i J_i^T summed directly (fitPlane sums the same terms without forming F_i), on planes
+// far from the origin, tilted, with anisotropic point covariances, and on a nearly isotropic blob.
+TEST(PlaneFit, CovarianceEqualsTheExplicitJacobianSum) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.25, 0.25);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vec3 centre(100.0 * u(rng), -300.0 * u(rng), 10.0 * u(rng));
+    const Vec3 n_true = Vec3(u(rng), u(rng), 1.0).normalized();
+    Vec3 t1, t2;
+    tangentBasis(n_true, t1, t2);
+    const double thickness = trial % 10 == 9 ? 0.25 : 0.01;  // every tenth: not planar
+    std::vector<PointWithCov> pts;
+    const int n_pts = 6 + trial;
+    for (int i = 0; i < n_pts; ++i) {
+      const Vec3 p = centre + u(rng) * t1 + 0.6 * u(rng) * t2 + thickness * u(rng) * n_true;
+      pts.push_back(withCov(p, centre + Vec3(3.0, -2.0, 1.5), 0.02, 0.2));
+    }
+    Plane fit;
+    fitPlane(pts, 0.0025, fit);
+    // The oracle, from the eigen-decomposition of the same scatter.
+    const double N = double(n_pts);
+    Vec3 q = Vec3::Zero();
+    for (const auto& p : pts) q += p.p_world;
+    q /= N;
+    Mat3 C = Mat3::Zero();
+    for (const auto& p : pts) C += (p.p_world - q) * (p.p_world - q).transpose();
+    C /= N;
+    Eigen::SelfAdjointEigenSolver<Mat3> es(C);
+    const Vec3 lam = es.eigenvalues();
+    Mat3 U = es.eigenvectors();
+    if (U.col(0).dot(fit.normal) < 0) U.col(0) = -U.col(0);  // eigenvector signs are arbitrary
+    Eigen::Matrix<double, 6, 6> ref = Eigen::Matrix<double, 6, 6>::Zero();
+    for (const auto& p : pts) {
+      Mat3 F = Mat3::Zero();
+      for (int m = 1; m < 3; ++m) {
+        const Mat3 M = U.col(m) * U.col(0).transpose() + U.col(0) * U.col(m).transpose();
+        F.row(m) = (p.p_world - q).transpose() * M / (N * (lam(0) - lam(m)));
+      }
+      Eigen::Matrix<double, 6, 3> J;
+      J.topRows<3>() = U * F;
+      J.bottomRows<3>() = Mat3::Identity() / N;
+      ref += J * p.cov_world * J.transpose();
+    }
+    EXPECT_LT((fit.cov_nq - ref).norm(), 1e-9 * ref.norm()) << "trial " << trial << "\n" << fit.cov_nq << "\n" << ref;
+    EXPECT_LT((fit.cov_nq - fit.cov_nq.transpose()).norm(), 1e-12 * ref.norm()) << "trial " << trial;
+  }
 }
 
 // Sigma_nq against the spread of [n; q] over re-sampled point sets. The normal has no variance along

@@ -1,9 +1,11 @@
 #include "livo/common/timing.hpp"
 
+#include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <numeric>
 #include <string>
@@ -44,5 +46,18 @@ std::uint64_t readStatusKb(const char* field) {
 
 std::uint64_t peakRssBytes() { return readStatusKb("VmHWM"); }
 std::uint64_t currentRssBytes() { return readStatusKb("VmRSS"); }
+
+double processCpuSeconds() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return 0.0;
+  const auto sec = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
+  return sec(u.ru_utime) + sec(u.ru_stime);
+}
+
+std::string resourceSummary() {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "peak RSS %.2f MiB, CPU time %.2f s", bytesToMb(peakRssBytes()), processCpuSeconds());
+  return buf;
+}
 
 }  // namespace livo

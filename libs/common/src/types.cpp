@@ -4,8 +4,6 @@
 
 namespace livo {
 
-Utime fromSeconds(double s) { return static_cast<Utime>(std::llround(s * 1e6)); }
-
 Utime LidarScan::endUtime() const {
   float last = 0.f;
   for (const auto& p : points) last = std::max(last, p.time_offset_s);

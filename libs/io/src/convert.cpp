@@ -16,6 +16,7 @@
 #include <livo/visual_point_t.hpp>
 
 #include <cmath>
+#include <utility>
 
 namespace livo {
 namespace {
@@ -185,15 +186,30 @@ Validation validate(const livo::image_t& m, const MessageLimits& lim) {
   return Validation::ok();
 }
 
-Validation fromMsg(const livo::image_t& m, Image& out, const MessageLimits& lim) {
-  LIVO_CHECK(validate(m, lim));
+namespace {
+void imageHeaderFromMsg(const livo::image_t& m, Image& out) {
   out.utime = m.utime;
   out.width = m.width;
   out.height = m.height;
   out.row_stride = m.row_stride;
   out.format = static_cast<PixelFormat>(m.pixel_format);
   out.exposure_time_s = m.exposure_time_s;
+}
+}  // namespace
+
+Validation fromMsg(const livo::image_t& m, Image& out, const MessageLimits& lim) {
+  LIVO_CHECK(validate(m, lim));
+  imageHeaderFromMsg(m, out);
   out.data = m.data;
+  return Validation::ok();
+}
+
+Validation fromMsg(livo::image_t&& m, Image& out, const MessageLimits& lim) {
+  LIVO_CHECK(validate(m, lim));
+  imageHeaderFromMsg(m, out);
+  out.data = std::move(m.data);
+  m.data = {};
+  m.size = 0;
   return Validation::ok();
 }
 

@@ -52,26 +52,35 @@ bool fitPlaneImpl(const std::vector<Point>& points, double min_eigen_value, Plan
   const bool normal_defined = -gap1 > tiny;
   out.is_plane = lambda(0) < min_eigen_value && normal_defined;
 
-  // Sigma_nq = sum_i J_i Sigma_i J_i^T with J_i = [U F_i; I/N].
-  Mat3 S_nn = Mat3::Zero(), S_nq = Mat3::Zero(), S_qq = Mat3::Zero();
+  // Sigma_nq = sum_i J_i Sigma_i J_i^T with J_i = [U F_i; I/N]. Rows 1, 2 of F_i are
+  // (p_i - q)^T M_m / (N gap_m) with M_m = u_m u0^T + u0 u_m^T (row 0 is zero), so
+  // d n / d p_i = U F_i = u1 f1^T + u2 f2^T with f_m = c_m M_m e = c_m ((u0.e) u_m + (u_m.e) u0).
+  // Then A Sigma A^T = sum_{m,k} (f_m^T Sigma f_k) u_m u_k^T and A Sigma = sum_m u_m (Sigma f_m)^T:
+  // three scalars and two vectors per point instead of three 3x3 products (the map server refits
+  // voxels with this on every update; docs/algorithms.md section 3).
   const Vec3 u0 = U.col(0), u1 = U.col(1), u2 = U.col(2);
-  // Rows 1, 2 of F_i: (p_i - q)^T M_m / (N gap_m), M_m = u_m u0^T + u0 u_m^T.
-  const Mat3 M1 = u1 * u0.transpose() + u0 * u1.transpose();
-  const Mat3 M2 = u2 * u0.transpose() + u0 * u2.transpose();
   const double c1 = normal_defined ? inv_n / gap1 : 0.0;
   const double c2 = normal_defined && -gap2 > tiny ? inv_n / gap2 : 0.0;
+  double g11 = 0.0, g12 = 0.0, g22 = 0.0;
+  Vec3 h1 = Vec3::Zero(), h2 = Vec3::Zero();
+  Mat3 S_qq = Mat3::Zero();
   for (const auto& pt : points) {
     const Vec3 e = positionOf(pt) - q;
+    const double a0 = u0.dot(e);
+    const Vec3 f1 = c1 * (a0 * u1 + u1.dot(e) * u0);
+    const Vec3 f2 = c2 * (a0 * u2 + u2.dot(e) * u0);
     const Mat3 cov = covOf(pt);
-    Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
-    F.row(1) = c1 * (e.transpose() * M1);
-    F.row(2) = c2 * (e.transpose() * M2);
-    const Mat3 A = U * F;  // d n / d p_i
-    const Mat3 A_cov = A * cov;
-    S_nn.noalias() += A_cov * A.transpose();
-    S_nq.noalias() += A_cov;  // times (I/N)^T, applied below
+    const Vec3 k1 = cov * f1, k2 = cov * f2;
+    g11 += f1.dot(k1);
+    g12 += f1.dot(k2);
+    g22 += f2.dot(k2);
+    h1 += k1;
+    h2 += k2;
     S_qq += cov;
   }
+  const Mat3 S_nn = g11 * (u1 * u1.transpose()) + g12 * (u1 * u2.transpose() + u2 * u1.transpose()) +
+                    g22 * (u2 * u2.transpose());
+  const Mat3 S_nq = u1 * h1.transpose() + u2 * h2.transpose();
   out.cov_nq.block<3, 3>(0, 0) = S_nn;
   out.cov_nq.block<3, 3>(0, 3) = S_nq * inv_n;
   out.cov_nq.block<3, 3>(3, 0) = (S_nq * inv_n).transpose();

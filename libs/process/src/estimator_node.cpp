@@ -282,14 +282,14 @@ void EstimatorNode::dropOldest() {
   queue_.pop_front();
 }
 
-double EstimatorNode::medianLagMs() const {
+double EstimatorNode::lagPercentileMs(double q) const {
   std::uint64_t n = 0;
   for (std::uint32_t c : lag_histogram_ms_) n += c;
   if (n == 0) return -1.0;
   std::uint64_t seen = 0;
   for (std::size_t i = 0; i < lag_histogram_ms_.size(); ++i) {
     seen += lag_histogram_ms_[i];
-    if (2 * seen >= n) return double(i) + 0.5;
+    if (double(seen) >= q * double(n)) return double(i) + 0.5;
   }
   return double(lag_histogram_ms_.size());
 }
@@ -381,7 +381,8 @@ std::string EstimatorNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
      << counters_.odometry_published << "\n";
-  os << "load: lag ms (arrival -> outputs) median " << medianLagMs() << ", max " << max_lag_ms_ << "; frames shed "
+  os << "load: lag ms (arrival -> outputs) median " << lagPercentileMs(0.5) << ", p95 " << lagPercentileMs(0.95)
+     << ", max " << max_lag_ms_ << "; frames shed "
      << counters_.frames_shed << " (more than " << cfg_.shed_frames_queued << " waiting), images shed "
      << counters_.images_shed << " (more than " << cfg_.shed_images_queued << " waiting, LiDAR not degenerate)\n";
   os << "start: " << (start_report_.empty() ? "no frame" : start_report_) << "; IMU gaps " << counters_.imu_gaps
@@ -401,7 +402,7 @@ std::string EstimatorNode::summary() const {
      << ", missing " << ic.missing << "\n";
   if (pipeline_.config().vio.estimate_time_offset)
     os << "camera time offset resets " << pipeline_.timeOffsetResets() << "\n";
-  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
+  os << resourceSummary() << "\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();
 }

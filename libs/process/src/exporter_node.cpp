@@ -240,6 +240,7 @@ std::string ExporterNode::summary() const {
     os << "continued files holding " << outputs_.previousPoses() << " poses; frames left out (not after their end) "
        << outputs_.skippedFrames() << "\n";
   os << "outputs in " << outputs_.dir() << "\n";
+  os << "CPU time " << processCpuSeconds() << " s\n";  // peak RSS: in the outputs' summary above
   return os.str();
 }
 

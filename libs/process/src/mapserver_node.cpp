@@ -196,7 +196,7 @@ std::string MapServerNode::summary() const {
   os << "estimator restarts: filter states " << counters_.filter_states << ", resume answers " << counters_.resume_answers
      << " (with a state " << counters_.resume_with_state << "), IMU samples dropped from the buffer "
      << counters_.resume_imu_dropped << "\n";
-  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
+  os << resourceSummary() << "\n";
   os << "messages:\n" << lcm_.countersSummary();
   return os.str();
 }

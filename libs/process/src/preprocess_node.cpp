@@ -45,7 +45,7 @@ Validation PreprocessNode::onCamera(const void* data, std::size_t size) {
   livo::image_t m;
   Image raw, gray;
   Validation v = decode(data, size, m, lcm_.limits());
-  if (v) v = fromMsg(m, raw, lcm_.limits());
+  if (v) v = fromMsg(std::move(m), raw, lcm_.limits());
   if (!v) return v;
   std::string err;
   if (raw.format == PixelFormat::Gray8 && raw.row_stride == raw.width) {
@@ -111,7 +111,7 @@ std::string PreprocessNode::summary() const {
   os << "non-finite points dropped in conversion " << counters_.nonfinite_points << ", images not convertible "
      << counters_.images_unconvertible << "\n";
   os << "recombiner:\n" << recombiner_.stats().summary() << "\n";
-  os << "peak RSS " << double(peakRssBytes()) / (1 << 20) << " MiB\n";
+  os << resourceSummary() << "\n";
   return os.str();
 }
 

@@ -60,5 +60,9 @@ std::uint64_t peakRssBytes();
 /// Current resident set size (VmRSS), bytes; 0 if unavailable.
 std::uint64_t currentRssBytes();
 inline double bytesToMb(std::uint64_t b) { return static_cast<double>(b) / (1024.0 * 1024.0); }
+/// CPU time this process has used so far (user + system, every thread), seconds; 0 if unavailable.
+double processCpuSeconds();
+/// "peak RSS 12.34 MiB, CPU time 5.67 s": the resource line of the processes' exit summaries.
+std::string resourceSummary();
 
 }  // namespace livo

@@ -12,6 +12,7 @@
 #include "livo/sensors/recombiner.hpp"
 
 #include <functional>
+#include <utility>
 #include <memory>
 
 namespace livo {
@@ -26,6 +27,7 @@ class Pipeline {
   void addScan(const LidarScan& s) { recombiner_.addScan(s); }
   /// Gray8 images (convert other formats first: livo/io/image_convert.hpp).
   void addImage(const Image& img) { recombiner_.addImage(img); }
+  void addImage(Image&& img) { recombiner_.addImage(std::move(img)); }
   /// End of input: lets the recombiner emit what it still holds.
   void flush() { recombiner_.flush(); }
   /// Runs every frame that is complete; calls `cb` per frame in time order. Returns the count.

@@ -54,6 +54,8 @@ Validation fromMsg(const livo::imu_t& m, ImuSample& out);
 Validation fromMsg(const livo::lidar_scan_t& m, LidarScan& out, const MessageLimits& lim = {},
                    std::size_t* dropped_nonfinite = nullptr);
 Validation fromMsg(const livo::image_t& m, Image& out, const MessageLimits& lim = {});
+/// The pixels move out of the message (no copy of a frame's worth of bytes); `m` is left without data.
+Validation fromMsg(livo::image_t&& m, Image& out, const MessageLimits& lim = {});
 Validation fromMsg(const livo::frame_t& m, Frame& out, const MessageLimits& lim = {},
                    std::size_t* dropped_nonfinite = nullptr);
 

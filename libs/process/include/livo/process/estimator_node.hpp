@@ -130,8 +130,8 @@ class EstimatorNode : public MapClient {
   bool last_degenerate_ = false;
   std::vector<std::uint32_t> lag_histogram_ms_;  ///< 1 ms bins (the last bin holds everything beyond)
   double max_lag_ms_ = 0.0;
-  /// Median of the lag histogram, ms (-1 before any frame).
-  double medianLagMs() const;
+  /// The q-quantile (0.5: median) of the lag histogram, ms (-1 before any frame).
+  double lagPercentileMs(double q) const;
   bool in_poll_ = false;
   // Pending request.
   std::int64_t waiting_for_ = -1;
