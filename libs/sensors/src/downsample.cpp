@@ -22,11 +22,11 @@ std::uint64_t hashVoxel(const VoxelIndex& k) {
   return h;
 }
 
-/// Calls visit(i, id) for every point i with finite, keyable coordinates, id its voxel's number in
-/// first-appearance order (0, 1, ...: a new voxel's id is the count of voxels before it). One pass: the
-/// callers sum into their per-voxel accumulators as they go, in point order. Returns the number of voxels.
-template <class PositionOf, class Visit>
-int forEachVoxel(std::size_t n, PositionOf position_of, double leaf, Visit visit) {
+/// voxel_of[i] = voxel id of point i in first-appearance order, -1 for skipped points.
+/// Returns the number of voxels.
+template <class PositionOf>
+int assignVoxels(std::size_t n, PositionOf position_of, double leaf, std::vector<int>& voxel_of) {
+  voxel_of.assign(n, -1);
   std::size_t table_size = 16;
   while (table_size < 2 * n) table_size <<= 1;
   const std::uint64_t mask = table_size - 1;
@@ -49,12 +49,12 @@ int forEachVoxel(std::size_t n, PositionOf position_of, double leaf, Visit visit
       const int id = table[slot];
       if (id < 0) {
         table[slot] = static_cast<int>(keys.size());
+        voxel_of[i] = static_cast<int>(keys.size());
         keys.push_back(key);
-        visit(i, static_cast<int>(keys.size()) - 1);
         break;
       }
       if (keys[id] == key) {
-        visit(i, id);
+        voxel_of[i] = id;
         break;
       }
       slot = (slot + 1) & mask;
@@ -67,26 +67,28 @@ int forEachVoxel(std::size_t n, PositionOf position_of, double leaf, Visit visit
 
 std::vector<LidarPoint> voxelDownsample(const std::vector<LidarPoint>& points, float leaf_m) {
   if (!(leaf_m > 0.f) || !std::isfinite(leaf_m)) return points;
+  std::vector<int> voxel_of;
+  const int n_voxels = assignVoxels(
+      points.size(), [&](std::size_t i) { return Eigen::Vector3d(points[i].p_lidar.cast<double>()); },
+      static_cast<double>(leaf_m), voxel_of);
+
   struct Sum {
     Eigen::Vector3d p = Eigen::Vector3d::Zero();
     double t = 0.0, intensity = 0.0;
     int count = 0;
     std::int16_t ring = -1;
   };
-  std::vector<Sum> sums;
-  sums.reserve(points.size() / 4 + 16);
-  const int n_voxels = forEachVoxel(
-      points.size(), [&](std::size_t i) { return Eigen::Vector3d(points[i].p_lidar.cast<double>()); },
-      static_cast<double>(leaf_m), [&](std::size_t i, int id) {
-        if (id == static_cast<int>(sums.size())) sums.emplace_back();
-        Sum& s = sums[static_cast<std::size_t>(id)];
-        const LidarPoint& q = points[i];
-        if (s.count == 0) s.ring = q.ring;
-        s.p += q.p_lidar.cast<double>();
-        s.t += q.time_offset_s;
-        s.intensity += q.intensity;
-        ++s.count;
-      });
+  std::vector<Sum> sums(n_voxels);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (voxel_of[i] < 0) continue;
+    Sum& s = sums[voxel_of[i]];
+    const LidarPoint& q = points[i];
+    if (s.count == 0) s.ring = q.ring;
+    s.p += q.p_lidar.cast<double>();
+    s.t += q.time_offset_s;
+    s.intensity += q.intensity;
+    ++s.count;
+  }
   std::vector<LidarPoint> out(n_voxels);
   for (int v = 0; v < n_voxels; ++v) {
     const double inv = 1.0 / sums[v].count;
@@ -100,17 +102,15 @@ std::vector<LidarPoint> voxelDownsample(const std::vector<LidarPoint>& points, f
 
 std::vector<Eigen::Vector3d> voxelDownsample(const std::vector<Eigen::Vector3d>& points, double leaf_m) {
   if (!(leaf_m > 0.0) || !std::isfinite(leaf_m)) return points;
-  std::vector<Eigen::Vector3d> sum;
-  std::vector<int> count;
-  const int n_voxels = forEachVoxel(points.size(), [&](std::size_t i) { return points[i]; }, leaf_m,
-                                    [&](std::size_t i, int id) {
-                                      if (id == static_cast<int>(sum.size())) {
-                                        sum.push_back(Eigen::Vector3d::Zero());
-                                        count.push_back(0);
-                                      }
-                                      sum[static_cast<std::size_t>(id)] += points[i];
-                                      ++count[static_cast<std::size_t>(id)];
-                                    });
+  std::vector<int> voxel_of;
+  const int n_voxels = assignVoxels(points.size(), [&](std::size_t i) { return points[i]; }, leaf_m, voxel_of);
+  std::vector<Eigen::Vector3d> sum(n_voxels, Eigen::Vector3d::Zero());
+  std::vector<int> count(n_voxels, 0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (voxel_of[i] < 0) continue;
+    sum[voxel_of[i]] += points[i];
+    ++count[voxel_of[i]];
+  }
   for (int v = 0; v < n_voxels; ++v) sum[v] /= count[v];
   return sum;
 }
