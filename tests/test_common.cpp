@@ -2,12 +2,14 @@
 // timing summaries.
 #include "livo/common/config.hpp"
 #include "livo/common/modes.hpp"
+#include "livo/common/ms_histogram.hpp"
 #include "livo/common/so3.hpp"
 #include "livo/common/timing.hpp"
 #include "livo/common/types.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -266,6 +268,34 @@ TEST(Types, FromSecondsRoundsAsLlround) {
   }
   for (double x : xs) ASSERT_EQ(fromSeconds(x), static_cast<Utime>(std::llround(x * 1e6))) << x;
   EXPECT_EQ(fromSeconds(std::nan("")), static_cast<Utime>(std::llround(std::nan(""))));
+}
+
+// Quantiles of the histogram against the sorted samples (the oracle): within half a bin, with values
+// beyond the last bin, negatives and NaN counted at the ends.
+TEST(MsHistogram, QuantilesMatchTheSortedSamplesWithinHalfABin) {
+  MsHistogram empty;
+  EXPECT_EQ(empty.quantile(0.5), -1.0);
+  std::mt19937 rng(3);
+  std::exponential_distribution<double> lag(1.0 / 20.0);  // mean 20 ms, a long tail
+  MsHistogram h(0.5, 200.0);
+  std::vector<double> xs;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = lag(rng);
+    xs.push_back(x);
+    h.add(x);
+  }
+  std::sort(xs.begin(), xs.end());
+  ASSERT_EQ(h.count(), xs.size());
+  for (double q : {0.1, 0.5, 0.9, 0.95, 0.99}) {
+    const double truth = xs[std::size_t(std::ceil(q * double(xs.size()))) - 1];
+    if (truth < 199.5) EXPECT_NEAR(h.quantile(q), truth, 0.25 + 1e-9) << "q " << q;
+  }
+  MsHistogram ends(1.0, 10.0);
+  ends.add(-3.0);
+  ends.add(std::nan(""));
+  ends.add(1e9);
+  EXPECT_EQ(ends.quantile(0.5), 0.5);    // two of three in the first bin
+  EXPECT_EQ(ends.quantile(1.0), 10.5);   // the last bin holds everything beyond 10 ms
 }
 
 TEST(Types, TimeConversionsAndScanEnd) {

@@ -456,6 +456,19 @@ TEST(EstimatorMessages, ValidationNamesTheField) {
   ASSERT_TRUE(fromMsg(toMsg(lost), back));
   EXPECT_EQ(back.health, 3);
   EXPECT_EQ(back.health_reason, lost.health_reason);
+
+  // A NUL inside a string decodes, but LCM's C++ encoder stops at it while sizing the message by the
+  // string's length: decode rejects it (the fuzz test found one on arm64), and a string without its NUL.
+  livo::estimator_stats_t named = toMsg(EstimatorStats());
+  named.health_reason = "abcdef";
+  std::vector<std::uint8_t> bytes = encode(named);  // the string's 6 bytes and its NUL come last
+  livo::estimator_stats_t decoded;
+  ASSERT_TRUE(decode(bytes.data(), bytes.size(), decoded));
+  bytes[bytes.size() - 4] = 0;  // 'd'
+  expectError(decode(bytes.data(), bytes.size(), decoded), "estimator_stats_t.health_reason", "NUL byte at 3 of 6");
+  bytes[bytes.size() - 4] = 'd';
+  bytes.back() = 'x';
+  expectError(decode(bytes.data(), bytes.size(), decoded), "estimator_stats_t.health_reason", "without its terminating NUL");
 }
 
 TEST(MessageConversions, FromMsgLeavesOutputUntouchedAndDecodePathReportsField) {

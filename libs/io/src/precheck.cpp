@@ -52,7 +52,19 @@ class Walker {
     std::int32_t len = 0;
     if (!count(field, 1 << 20, 1, len)) return false;
     if (len == 0) return fail(field + ": string length 0 (must include the terminating NUL)");
-    return skip(static_cast<std::size_t>(len), field);
+    // LCM's C++ code encodes a string up to its first NUL but sizes the message by its length: a NUL
+    // inside would decode, then re-encode into a shorter message than it says (found by the fuzz test on
+    // arm64, whose mutations differ from x86's).
+    const std::size_t n = static_cast<std::size_t>(len);
+    if (n <= n_ - pos_) {
+      const void* nul = std::memchr(p_ + pos_, 0, n);
+      if (nul == nullptr) return fail(field + ": string without its terminating NUL");
+      if (static_cast<const std::uint8_t*>(nul) != p_ + pos_ + n - 1)
+        return fail(field + ": string holds a NUL byte at " +
+                    std::to_string(static_cast<const std::uint8_t*>(nul) - (p_ + pos_)) + " of " +
+                    std::to_string(n - 1));
+    }
+    return skip(n, field);
   }
   bool fail(std::string e) {
     if (err_.empty()) err_ = std::move(e);

@@ -88,6 +88,7 @@ MapUpdateReport MapService::apply(const MapUpdate& u) {
   ++counters_.updates;
   counters_.max_update_ms = std::max(counters_.max_update_ms, watch.elapsedMs());
   counters_.max_update_cpu_ms = std::max(counters_.max_update_cpu_ms, cpu.elapsedMs());
+  counters_.update_cpu_ms.add(cpu.elapsedMs());
   return rep;
 }
 

@@ -282,17 +282,6 @@ void EstimatorNode::dropOldest() {
   queue_.pop_front();
 }
 
-double EstimatorNode::lagPercentileMs(double q) const {
-  std::uint64_t n = 0;
-  for (std::uint32_t c : lag_histogram_ms_) n += c;
-  if (n == 0) return -1.0;
-  std::uint64_t seen = 0;
-  for (std::size_t i = 0; i < lag_histogram_ms_.size(); ++i) {
-    seen += lag_histogram_ms_[i];
-    if (double(seen) >= q * double(n)) return double(i) + 0.5;
-  }
-  return double(lag_histogram_ms_.size());
-}
 
 void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   const std::size_t nonfinite = q.nonfinite;
@@ -320,8 +309,7 @@ void EstimatorNode::processFrame(Queued& q, bool shed_image) {
   st.lag_ms = float(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - q.arrived).count());
   st.frames_shed = q.shed_before;
   st.image_shed = shed_image;
-  if (lag_histogram_ms_.empty()) lag_histogram_ms_.assign(10001, 0);  // 0..10 s
-  ++lag_histogram_ms_[std::min<std::size_t>(std::size_t(st.lag_ms), lag_histogram_ms_.size() - 1)];
+  lag_ms_.add(st.lag_ms);
   max_lag_ms_ = std::max(max_lag_ms_, double(st.lag_ms));
   lcm_.publish(channels_.estimator_stats, toMsg(st));
   if (!f.lio.initialized) {  // no pose yet: say why, once per second of sensor time
@@ -381,7 +369,7 @@ std::string EstimatorNode::summary() const {
   os << std::fixed << std::setprecision(2);
   os << "frames " << counters_.frames << " (dropped from the queue " << counters_.frames_dropped << "), odometry "
      << counters_.odometry_published << "\n";
-  os << "load: lag ms (arrival -> outputs) median " << lagPercentileMs(0.5) << ", p95 " << lagPercentileMs(0.95)
+  os << "load: lag ms (arrival -> outputs) median " << lag_ms_.quantile(0.5) << ", p95 " << lag_ms_.quantile(0.95)
      << ", max " << max_lag_ms_ << "; frames shed "
      << counters_.frames_shed << " (more than " << cfg_.shed_frames_queued << " waiting), images shed "
      << counters_.images_shed << " (more than " << cfg_.shed_images_queued << " waiting, LiDAR not degenerate)\n";

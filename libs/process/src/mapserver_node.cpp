@@ -191,7 +191,8 @@ std::string MapServerNode::summary() const {
   os << "slides " << h.slides << " (worst " << h.max_slide_ms << " ms), evicted: voxels " << h.evicted_local_voxels
      << ", visual points " << h.evicted_longterm_points + h.evicted_local_points << "; worst update "
      << c.max_update_ms << " ms at t " << toSeconds(Utime(counters_.worst_update_utime)) << " s (CPU time: worst "
-     << c.max_update_cpu_ms << " ms; parts: insertion " << c.max_insert_cpu_ms << ", visual " << c.max_visual_cpu_ms
+     << c.max_update_cpu_ms << " ms, median " << c.update_cpu_ms.quantile(0.5) << ", p99 " << c.update_cpu_ms.quantile(0.99)
+     << " ms; worst parts: insertion " << c.max_insert_cpu_ms << ", visual " << c.max_visual_cpu_ms
      << ", maintenance " << c.max_maintenance_cpu_ms << " ms)\n";
   os << "estimator restarts: filter states " << counters_.filter_states << ", resume answers " << counters_.resume_answers
      << " (with a state " << counters_.resume_with_state << "), IMU samples dropped from the buffer "

@@ -4,6 +4,7 @@
 // LCM adapter over this class; the tests drive it directly.
 #pragma once
 
+#include "livo/common/ms_histogram.hpp"
 #include "livo/map/hybrid_map.hpp"
 #include "livo/map/map_protocol.hpp"
 
@@ -28,6 +29,7 @@ struct MapServiceCounters {
   double max_update_cpu_ms = 0.0;     ///< worst apply(), the thread's CPU time (without waits for a core)
   /// Worst CPU time of apply()'s parts: LiDAR insertion, visual changes, maintenance (slides, cap).
   double max_insert_cpu_ms = 0.0, max_visual_cpu_ms = 0.0, max_maintenance_cpu_ms = 0.0;
+  MsHistogram update_cpu_ms{0.1, 1000.0};  ///< every apply()'s CPU time, 0.1 ms bins (quantiles)
 };
 
 class MapService {

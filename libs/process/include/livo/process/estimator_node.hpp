@@ -21,6 +21,7 @@
 #pragma once
 
 #include "livo/common/config.hpp"
+#include "livo/common/ms_histogram.hpp"
 #include "livo/estimation/frame_pipeline.hpp"
 #include "livo/estimation/remote_map.hpp"
 #include "livo/common/timing.hpp"
@@ -128,10 +129,8 @@ class EstimatorNode : public MapClient {
   void dropOldest();
   std::deque<Queued> queue_;
   bool last_degenerate_ = false;
-  std::vector<std::uint32_t> lag_histogram_ms_;  ///< 1 ms bins (the last bin holds everything beyond)
+  MsHistogram lag_ms_{1.0, 10000.0};  ///< frame arrival -> outputs, 1 ms bins to 10 s
   double max_lag_ms_ = 0.0;
-  /// The q-quantile (0.5: median) of the lag histogram, ms (-1 before any frame).
-  double lagPercentileMs(double q) const;
   bool in_poll_ = false;
   // Pending request.
   std::int64_t waiting_for_ = -1;
