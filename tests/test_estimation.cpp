@@ -183,14 +183,21 @@ TEST(LioUpdate, CorrectionChiSquareFollowsTheDrawnPriorAndCatchesAnOverconfident
   P.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-4;
   const LioUpdateResult r = lidarUpdate(x, P, body, map, cfg);
   EXPECT_GT(r.correction_chi2, HealthConfig().correction_chi2_max) << "matched " << r.matched << " of " << r.covered;
-  // 12 cm off: beyond the gates of a 1 cm prior along x, the x walls' third of the points stops
-  // matching (the share check's case; the correction cannot see what does not match).
+  // 12 cm off: beyond the gates of a 1 cm prior along x. Either the x walls' third of the points stops
+  // matching (the share check's case; the correction cannot see what does not match) or an iteration
+  // re-associates them and pulls the pose back, and then the correction is many sigmas: which of the two
+  // happens is a knife edge of the iteration (x86: 1986 of 2961 matched, 2026-12-07; the arm64 build,
+  // whose compiler fuses multiply-adds, 2988 of 2998 matched, 2026-12-08). The health checks catch both.
   NavState far = truth;
   far.p_world_imu += Vec3(0.12, 0.0, 0.0);
   P = P0;
   P.block<3, 3>(sidx::kPos, sidx::kPos) = Mat3::Identity() * 1e-4;
   const LioUpdateResult rf = lidarUpdate(far, P, body, map, cfg);
-  EXPECT_LT(rf.matched, 0.8 * rf.covered);  // measured 2026-12-07: 1986 of 2961 (0.67)
+  const bool share_low = rf.matched < 0.8 * rf.covered;
+  const bool chi2_high = rf.correction_chi2 > HealthConfig().correction_chi2_max;
+  EXPECT_TRUE(share_low || chi2_high) << "matched " << rf.matched << " of " << rf.covered << ", chi2 "
+                                      << rf.correction_chi2;
+  std::printf("12 cm off: matched %d of %d, correction chi2 %.1f\n", rf.matched, rf.covered, rf.correction_chi2);
 }
 
 // The association runs in fixed blocks on the pool's threads and is summed in block order: the
