@@ -53,8 +53,8 @@ class Walker {
     if (!count(field, 1 << 20, 1, len)) return false;
     if (len == 0) return fail(field + ": string length 0 (must include the terminating NUL)");
     // LCM's C++ code encodes a string up to its first NUL but sizes the message by its length: a NUL
-    // inside would decode, then re-encode into a shorter message than it says (found by the fuzz test on
-    // arm64, whose seed messages, and so whose mutations, differ from x86's in the floats' last bits).
+    // inside would decode, then re-encode into a shorter message than it says (found by the fuzz test's
+    // run under qemu on arm64).
     const std::size_t n = static_cast<std::size_t>(len);
     if (n <= n_ - pos_) {
       const void* nul = std::memchr(p_ + pos_, 0, n);
