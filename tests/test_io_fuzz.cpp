@@ -74,6 +74,7 @@ void replay(const std::string& target, int (*fn)(const std::uint8_t*, std::size_
   ASSERT_FALSE(seeds.empty());
   std::mt19937 rng(12345);
   std::size_t runs = 0;
+  fuzz::outcomes() = {};
   for (const auto& [name, bytes] : seeds) {
     SCOPED_TRACE(name);
     fn(bytes.data(), bytes.size());
@@ -83,7 +84,14 @@ void replay(const std::string& target, int (*fn)(const std::uint8_t*, std::size_
       ++runs;
     }
   }
-  std::cout << target << ": " << seeds.size() << " seeds, " << runs << " mutated inputs handled\n";
+  // Every input returned (an unhandled one aborts the target); the mutations must reach both outcomes,
+  // else the replay exercises one check only.
+  const fuzz::Outcomes o = fuzz::outcomes();
+  EXPECT_EQ(o.accepted + o.rejected, runs + seeds.size());
+  EXPECT_GE(o.accepted, seeds.size());  // at least the valid seeds
+  EXPECT_GT(o.rejected, runs / 10);
+  std::cout << target << ": " << seeds.size() << " seeds, " << runs << " mutated inputs handled: " << o.accepted
+            << " accepted, " << o.rejected << " rejected with a reason\n";
 }
 
 }  // namespace

@@ -22,6 +22,7 @@ namespace {
 
 /// A rejection must say why.
 void requireReason(const std::string& why, const char* where) {
+  ++outcomes().rejected;
   if (why.empty()) {
     std::fprintf(stderr, "fuzz: %s rejected an input without a message\n", where);
     std::abort();
@@ -55,6 +56,7 @@ void roundTrip(const std::uint8_t* data, std::size_t size, const char* name,
     std::fprintf(stderr, "fuzz: %s accepted a message whose re-encoding is rejected: %s\n", name, v2.error.c_str());
     std::abort();
   }
+  ++outcomes().accepted;
 }
 
 // fromMsg overloads with a uniform signature.
@@ -112,7 +114,10 @@ SubmapPlane seedPlane() {
 }  // namespace
 
 int fuzzMessages(const std::uint8_t* data, std::size_t size) {
-  if (size < 1) return 0;
+  if (size < 1) {  // no type byte: nothing to decode
+    ++outcomes().rejected;
+    return 0;
+  }
   const int type = data[0] % kTypes;
   const std::uint8_t* d = data + 1;
   const std::size_t n = size - 1;
@@ -149,6 +154,7 @@ int fuzzConfig(const std::uint8_t* data, std::size_t size) {
     channels.load(root.section("channels"));
     if (cfg.camera.enabled) CameraModel::create(cfg.camera);
     file.checkAllKeysUsed();
+    ++outcomes().accepted;
   } catch (const std::exception& e) {
     requireReason(e.what(), "the config loader");
   }
@@ -163,10 +169,16 @@ int fuzzMapFile(const std::uint8_t* data, std::size_t size) {
     // A loaded map must be usable.
     map.update(Vec3::Zero());
     map.stats();
+    ++outcomes().accepted;
   } catch (const std::exception& e) {
     requireReason(e.what(), "the map file loader");
   }
   return 0;
+}
+
+Outcomes& outcomes() {
+  static Outcomes o;
+  return o;
 }
 
 std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seeds(const std::string& target) {

@@ -23,6 +23,13 @@ int fuzzConfig(const std::uint8_t* data, std::size_t size);
 /// The bytes are a map file (map_file.hpp).
 int fuzzMapFile(const std::uint8_t* data, std::size_t size);
 
+/// How many inputs the targets accepted and rejected (with a reason) since the last reset: test_io_fuzz's
+/// replay checks that its mutations reach both outcomes (a replay that only ever rejects tests one check).
+struct Outcomes {
+  std::size_t accepted = 0, rejected = 0;
+};
+Outcomes& outcomes();
+
 /// Valid inputs for a target ("messages", "config", "mapfile"): names and bytes.
 std::vector<std::pair<std::string, std::vector<std::uint8_t>>> seeds(const std::string& target);
 
