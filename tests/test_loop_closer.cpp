@@ -181,8 +181,9 @@ TEST(LoopCloser, RepeatedBlocksGiveNoFalseLoop) {
               "overlap, %d high residual, %d not converged, %d inconsistent; error rms %.3f m (odometry) -> %.3f m\n",
               r.keyframes, r.path_m, r.loops, r.false_loops, c.accepted, c.low_overlap, c.high_residual,
               c.no_convergence, c.inconsistent, r.odom_rms_m, r.map_rms_m);
-  // 2026-12-06 and again 2026-12-08: 409 keyframes over 974 m, 8 loops (all at the revisit of the start), none false; 645
-  // look-alike candidates rejected as inconsistent with the odometry; error rms 6.77 m -> 0.74 m.
+  // 2026-12-06 and again 2026-12-08: 409 keyframes over 974 m, 8 loops (all at the revisit of the
+  // start), none false; 645 look-alike candidates rejected as inconsistent with the odometry; error rms
+  // 6.77 m -> 0.74 m.
   EXPECT_EQ(r.false_loops, 0);
   EXPECT_GE(r.loops, 4) << "the true revisit of the start";
   EXPECT_GT(c.inconsistent, 100) << "the twins were proposed: the trap was sprung";
