@@ -98,7 +98,7 @@ TEST(LivoRun, WritesEveryOutputFileInEachVisualMode) {
     std::printf("[ demo 8 s ] camera time offset %.2f ms, sigma %.3f ms (truth 0)\n", 1e3 * td.back(), 1e3 * sd.back());
     EXPECT_LE(std::abs(td.back()), 0.0045);
     EXPECT_GT(sd.back(), 0.0);
-    EXPECT_LT(sd.back(), 0.001);                     // the images have narrowed the 5 ms prior
+    EXPECT_LT(sd.back(), 0.0001);  // the images have narrowed the 5 ms prior (0.048 ms 2026-12-05, 0.050 2026-12-08)
     const std::string stats = slurp(out / "stats.json");
     EXPECT_NE(stats.find("\"time_offset_estimate_s\""), std::string::npos) << stats;
     EXPECT_NE(stats.find("\"time_offset_sigma_s\""), std::string::npos) << stats;

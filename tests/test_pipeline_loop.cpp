@@ -155,7 +155,7 @@ TEST(LivoRunLoop, ASecondRunLocalisesInTheSavedMapOfTheFirst) {
   EXPECT_GE(to_localise, 0.0);
   EXPECT_LE(to_localise, 3.0);
   EXPECT_LE(mean, 0.026);
-  EXPECT_LE(max, 0.15);
+  EXPECT_LE(max, 0.08);  // 3.8 cm 2026-12-06, 3.70 cm 2026-12-08
 
   // --prior-map with --loop: refused (exit 2) naming both.
   const livo::test::Ran both = livo::test::runSplit(bin("livo-run") + " " + (dir / "second.lcm").string() + " --config " +
