@@ -1,6 +1,7 @@
 // libs/io: message round trips for every type, pre-decode checks of declared counts, validation errors
 // that name the field, struct <-> message conversions, and LCM log writing/reading (truncation, garbage).
 #include "livo/io/convert.hpp"
+#include "livo/io/image_convert.hpp"
 #include "livo/io/log.hpp"
 
 #include <livo/estimator_stats_t.hpp>
@@ -106,6 +107,45 @@ std::string tmpPath(const std::string& name) {
 }
 
 }  // namespace
+
+// toGray8 taking its input: a packed GRAY8 image moves (same pixels, no copy left behind); a strided
+// GRAY8 and an RGB8 image convert exactly as the copying overload does (the oracle).
+TEST(ImageConvert, MovingOverloadMovesPackedGrayAndConvertsTheRest) {
+  Image packed;
+  packed.utime = 7;
+  packed.width = 4;
+  packed.height = 2;
+  packed.row_stride = 4;
+  packed.exposure_time_s = 0.01f;
+  for (int i = 0; i < 8; ++i) packed.data.push_back(std::uint8_t(10 * i));
+  Image copied, moved;
+  std::string err;
+  ASSERT_TRUE(toGray8(packed, copied, &err)) << err;
+  const std::uint8_t* pixels = packed.data.data();
+  ASSERT_TRUE(toGray8(std::move(packed), moved, &err)) << err;
+  EXPECT_EQ(moved.data.data(), pixels);  // the buffer itself moved
+  EXPECT_EQ(moved.data, copied.data);
+  EXPECT_EQ(moved.utime, copied.utime);
+  EXPECT_EQ(moved.row_stride, copied.row_stride);
+  EXPECT_EQ(moved.exposure_time_s, copied.exposure_time_s);
+
+  Image strided = copied;
+  strided.row_stride = 6;
+  strided.data = {1, 2, 3, 4, 0, 0, 5, 6, 7, 8, 0, 0};
+  Image rgb;
+  rgb.width = 2;
+  rgb.height = 1;
+  rgb.row_stride = 6;
+  rgb.format = PixelFormat::Rgb8;
+  rgb.data = {255, 0, 0, 0, 0, 255};
+  for (const Image& in : {strided, rgb}) {
+    Image a, b;
+    ASSERT_TRUE(toGray8(in, a, &err)) << err;
+    ASSERT_TRUE(toGray8(Image(in), b, &err)) << err;
+    EXPECT_EQ(a.data, b.data);
+    EXPECT_EQ(b.row_stride, b.width);
+  }
+}
 
 TEST(Messages, RoundTripEveryType) {
   expectRoundTrip(makeImu());

@@ -349,11 +349,7 @@ bool feedEvent(const LogEvent& ev, const Config& cfg, Pipeline& pipeline, Counte
     std::string err;
     Validation v = decode(ev.data.data(), ev.data.size(), m, limits);
     if (v) v = fromMsg(std::move(m), img, limits);
-    if (v && img.format == PixelFormat::Gray8 && img.row_stride == img.width) {
-      gray = std::move(img);  // already what the pipeline takes: no copy
-    } else if (v && !toGray8(img, gray, &err)) {
-      v = Validation::fail(err);
-    }
+    if (v && !toGray8(std::move(img), gray, &err)) v = Validation::fail(err);
     if (!v) {
       counters["rejected_images"] += 1;
       if (!quiet) progress.message("livo-run: dropped an image: " + v.error);

@@ -1,5 +1,7 @@
 #include "livo/io/image_convert.hpp"
 
+#include <utility>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -52,6 +54,15 @@ bool toGray8(const Image& in, Image& out, std::string* error) {
   for (int r = 0; r < gray.rows; ++r)
     std::copy(gray.ptr<std::uint8_t>(r), gray.ptr<std::uint8_t>(r) + gray.cols, out.data.begin() + std::ptrdiff_t(r) * gray.cols);
   return true;
+}
+
+bool toGray8(Image&& in, Image& out, std::string* error) {
+  if (in.format == PixelFormat::Gray8 && in.row_stride == in.width &&
+      in.data.size() == std::size_t(in.width) * std::size_t(in.height)) {
+    out = std::move(in);
+    return true;
+  }
+  return toGray8(static_cast<const Image&>(in), out, error);
 }
 
 }  // namespace livo

@@ -48,9 +48,7 @@ Validation PreprocessNode::onCamera(const void* data, std::size_t size) {
   if (v) v = fromMsg(std::move(m), raw, lcm_.limits());
   if (!v) return v;
   std::string err;
-  if (raw.format == PixelFormat::Gray8 && raw.row_stride == raw.width) {
-    gray = std::move(raw);
-  } else if (!toGray8(raw, gray, &err)) {
+  if (!toGray8(std::move(raw), gray, &err)) {
     ++counters_.images_unconvertible;
     return Validation::fail("image_t at utime " + std::to_string(m.utime) + ": " + err);
   }

@@ -44,7 +44,7 @@ ViewerNode::ViewerNode(LcmNode& lcm, const ChannelConfig& channels, viewer::Inbo
       Image img, gray;
       Validation v = fromMsg(m, img, lcm_.limits());
       std::string err;
-      if (v && !toGray8(img, gray, &err)) v = Validation::fail(err);
+      if (v && !toGray8(std::move(img), gray, &err)) v = Validation::fail(err);
       if (v) inbox_.pushImage(std::move(gray));
       return v;
     });
